@@ -1,0 +1,33 @@
+// Subcommands of the one `weathergs` binary register themselves from their own cmd_*.cc file:
+//
+//   namespace { Command make_compare(CLI::App& root) {
+//     auto opts = std::make_shared<CompareOptions>();
+//     CLI::App* sub = root.add_subcommand("compare", "Score one image pair");
+//     sub->add_option("a", opts->a)->required();
+//     return {sub, [opts] { return run_compare(*opts); }};
+//   } }
+//   WGS_REGISTER_COMMAND(compare, make_compare)
+//
+// Exit codes (docs/cli.md): 0 success, 1 a check failed, 2 bad input or usage, 3 internal error.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <string>
+
+namespace weathergs::cli {
+
+constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2, kExitInternal = 3;
+
+struct Command {
+  CLI::App* app = nullptr;
+  std::function<int()> run;
+};
+using CommandFactory = Command (*)(CLI::App& root);
+
+bool register_command(const char* name, CommandFactory factory);
+
+}  // namespace weathergs::cli
+
+#define WGS_REGISTER_COMMAND(name, factory) \
+  static const bool wgs_registered_##name = ::weathergs::cli::register_command(#name, factory);

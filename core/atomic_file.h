@@ -1,0 +1,37 @@
+// Atomic outputs: write to a temporary sibling, then rename over the destination. A failed or killed
+// run leaves either the old file or the complete new one, never half a file.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace weathergs {
+
+// Calls write(tmp_path) and renames tmp_path to path on success; on any exception the temp file is
+// removed and the exception propagates. The temp name keeps the extension: "a.png" -> "a.tmp-<r>.png".
+void write_file_atomic_with(const std::string& path, const std::function<void(const std::string&)>& write);
+void write_file_atomic(const std::string& path, const std::string& contents);
+
+// Reads a whole file; InputError if missing or unreadable.
+std::string read_file(const std::string& path);
+
+// A directory that becomes visible at `final_path` only when commit() is called: work happens in
+// "<final_path>.tmp-<random>", which is removed if the object is destroyed without commit().
+// commit() replaces an existing final_path (the old one is removed only after the new one is complete).
+class AtomicDirectory {
+ public:
+  explicit AtomicDirectory(const std::string& final_path);
+  ~AtomicDirectory();
+  AtomicDirectory(const AtomicDirectory&) = delete;
+  AtomicDirectory& operator=(const AtomicDirectory&) = delete;
+
+  const std::string& path() const { return tmp_path_; }  // where to write now
+  const std::string& final_path() const { return final_path_; }
+  void commit();
+
+ private:
+  std::string final_path_, tmp_path_;
+  bool committed_ = false;
+};
+
+}  // namespace weathergs

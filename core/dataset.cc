@@ -1,0 +1,193 @@
+#include "core/dataset.h"
+
+#include <filesystem>
+#include <set>
+
+#include "core/atomic_file.h"
+
+namespace weathergs {
+
+namespace fs = std::filesystem;
+
+const Camera& Dataset::camera(const std::string& view) const {
+  for (const Camera& c : cameras)
+    if (c.name == view) return c;
+  throw InputError(root + "/cameras.json", "no view named '" + view + "'");
+}
+
+const std::vector<std::string>& Dataset::split(const std::string& name) const {
+  auto it = info.splits.find(name);
+  if (it == info.splits.end())
+    throw InputError(root + "/dataset.json:/splits", "no split named '" + name + "'");
+  return it->second;
+}
+
+std::string Dataset::path(const std::string& folder, const std::string& view, const std::string& ext) const {
+  return (fs::path(root) / folder / (view + ext)).string();
+}
+
+std::map<std::string, std::vector<std::string>> llff_splits(const std::vector<std::string>& views, int every) {
+  std::map<std::string, std::vector<std::string>> s{{"train", {}}, {"test", {}}};
+  for (size_t i = 0; i < views.size(); ++i) s[i % size_t(every) == 0 ? "test" : "train"].push_back(views[i]);
+  return s;
+}
+
+bool is_safe_view_name(const std::string& name) {
+  if (name.empty() || name[0] == '.') return false;
+  for (char c : name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) return false;
+  return true;
+}
+
+namespace {
+Eigen::Matrix4d read_matrix4(const JsonReader& r) {
+  if (!r.is_array() || r.size() != 4) throw InputError(r.where(), "expected a 4x4 array of rows");
+  Eigen::Matrix4d m;
+  for (size_t i = 0; i < 4; ++i) {
+    JsonReader row = r.at(i);
+    if (!row.is_array() || row.size() != 4) throw InputError(row.where(), "expected a row of 4 numbers");
+    for (size_t j = 0; j < 4; ++j) m(int(i), int(j)) = row.at(j).as<double>();
+  }
+  return m;
+}
+}  // namespace
+
+Camera camera_from_json(const JsonReader& r) {
+  if (!r.is_object()) throw InputError(r.where(), "expected a camera object");
+  Camera c;
+  c.name = r.get<std::string>("name");
+  if (!is_safe_view_name(c.name))
+    throw InputError(r.where("name"), "view name '" + c.name + "' is not file-system safe ([A-Za-z0-9._-])");
+  c.width = r.get<int>("width");
+  c.height = r.get<int>("height");
+  c.fx = r.get<double>("fx");
+  c.fy = r.get<double>("fy");
+  c.cx = r.get<double>("cx");
+  c.cy = r.get<double>("cy");
+  c.camera_from_world = read_matrix4(r.child("camera_from_world"));
+  c.time_s = r.get_or<double>("time_s", 0.0);
+  c.exposure_s = r.get_or<double>("exposure_s", 0.0);
+  c.f_number = r.get_optional<double>("f_number");
+  c.focal_length_mm = r.get_optional<double>("focal_length_mm");
+  c.focus_distance_m = r.get_optional<double>("focus_distance_m");
+  r.finish();
+  validate_camera(c, r.where());
+  return c;
+}
+
+Json camera_to_json(const Camera& c) {
+  Json m = Json::array();
+  for (int i = 0; i < 4; ++i) {
+    Json row = Json::array();
+    for (int j = 0; j < 4; ++j) row.push_back(c.camera_from_world(i, j));
+    m.push_back(row);
+  }
+  Json j = {{"name", c.name}, {"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy},
+            {"cx", c.cx},     {"cy", c.cy},       {"camera_from_world", m},
+            {"time_s", c.time_s}, {"exposure_s", c.exposure_s}};
+  if (c.f_number) j["f_number"] = *c.f_number;
+  if (c.focal_length_mm) j["focal_length_mm"] = *c.focal_length_mm;
+  if (c.focus_distance_m) j["focus_distance_m"] = *c.focus_distance_m;
+  return j;
+}
+
+std::vector<Camera> read_cameras_json(const std::string& path) {
+  JsonReader root = JsonReader::from_file(path);
+  if (!root.is_object()) throw InputError(root.where(), "expected an object with key 'views'");
+  JsonReader views = root.child("views");
+  root.finish();
+  if (!views.is_array()) throw InputError(views.where(), "expected an array of cameras");
+  std::vector<Camera> cams;
+  std::set<std::string> names;
+  for (size_t i = 0; i < views.size(); ++i) {
+    cams.push_back(camera_from_json(views.at(i)));
+    if (!names.insert(cams.back().name).second)
+      throw InputError(views.at(i).where("name"), "duplicate view name '" + cams.back().name + "'");
+  }
+  if (cams.empty()) throw InputError(views.where(), "expected at least one camera");
+  return cams;
+}
+
+DatasetInfo read_dataset_json(const std::string& path) {
+  JsonReader r = JsonReader::from_file(path);
+  if (!r.is_object()) throw InputError(r.where(), "expected an object");
+  const std::string format = r.get<std::string>("format");
+  if (format != "weathergs-dataset")
+    throw InputError(r.where("format"), "expected \"weathergs-dataset\", got \"" + format + "\"");
+  const int version = r.get<int>("version");
+  if (version != 1) throw InputError(r.where("version"), "unsupported version " + std::to_string(version) + " (expected 1)");
+  DatasetInfo info;
+  info.name = r.get<std::string>("name");
+  info.scene = r.get_or<std::string>("scene", "");
+  info.weather = r.get_or<std::string>("weather", "clear");
+  JsonReader splits = r.child("splits");
+  if (!splits.is_object()) throw InputError(splits.where(), "expected an object of named view lists");
+  for (const std::string& key : splits.keys()) {
+    JsonReader list = splits.child(key);
+    if (!list.is_array()) throw InputError(list.where(), "expected an array of view names");
+    std::vector<std::string>& views = info.splits[key];
+    for (size_t i = 0; i < list.size(); ++i) views.push_back(list.at(i).as<std::string>());
+  }
+  info.splits_rule = r.get_optional<std::string>("splits_rule");
+  if (r.has("generator")) {
+    JsonReader g = r.child("generator");
+    if (!g.is_object()) throw InputError(g.where(), "expected an object");
+    info.generator = g.value();
+  }
+  if (r.has("source")) info.source = r.child("source").value();
+  r.finish();
+  return info;
+}
+
+Json dataset_info_to_json(const DatasetInfo& info) {
+  Json j = {{"format", "weathergs-dataset"}, {"version", 1}, {"name", info.name},
+            {"scene", info.scene}, {"weather", info.weather}, {"splits", info.splits}};
+  if (info.splits_rule) j["splits_rule"] = *info.splits_rule;
+  if (info.generator) j["generator"] = *info.generator;
+  if (info.source) j["source"] = *info.source;
+  return j;
+}
+
+void validate_dataset(const Dataset& d, const std::string& where) {
+  std::set<std::string> names;
+  for (const Camera& c : d.cameras)
+    if (!names.insert(c.name).second) throw InputError(where, "duplicate view name '" + c.name + "'");
+  for (const auto& [split, views] : d.info.splits)
+    for (const std::string& v : views)
+      if (!names.count(v))
+        throw InputError(where + ":/splits/" + split, "view '" + v + "' is not in cameras.json");
+  auto train = d.info.splits.find("train"), test = d.info.splits.find("test");
+  if (train != d.info.splits.end() && test != d.info.splits.end()) {
+    std::set<std::string> t(test->second.begin(), test->second.end());
+    for (const std::string& v : train->second)
+      if (t.count(v)) throw InputError(where + ":/splits", "view '" + v + "' is in both train and test");
+  }
+}
+
+Dataset read_dataset(const std::string& root) {
+  if (!fs::is_directory(root)) throw InputError(root, "dataset directory does not exist");
+  Dataset d;
+  d.root = root;
+  d.info = read_dataset_json((fs::path(root) / "dataset.json").string());
+  d.cameras = read_cameras_json((fs::path(root) / "cameras.json").string());
+  validate_dataset(d, (fs::path(root) / "dataset.json").string());
+  return d;
+}
+
+void write_cameras_json(const std::string& path, const std::vector<Camera>& cameras) {
+  Json views = Json::array();
+  for (const Camera& c : cameras) views.push_back(camera_to_json(c));
+  write_file_atomic(path, Json{{"views", views}}.dump(2) + "\n");
+}
+
+void write_dataset_json(const std::string& path, const DatasetInfo& info) {
+  write_file_atomic(path, dataset_info_to_json(info).dump(2) + "\n");
+}
+
+void write_dataset(const Dataset& d) {
+  validate_dataset(d, d.root);
+  write_cameras_json((fs::path(d.root) / "cameras.json").string(), d.cameras);
+  write_dataset_json((fs::path(d.root) / "dataset.json").string(), d.info);
+}
+
+}  // namespace weathergs

@@ -1,0 +1,62 @@
+// The on-disk dataset of DATASET_FORMAT.md: dataset.json + cameras.json + per-view image folders.
+// Readers validate strictly: errors name the file, the JSON pointer and what was expected, and
+// unknown keys are errors.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/image.h"
+#include "core/json_reader.h"
+
+namespace weathergs {
+
+struct DatasetInfo {
+  std::string name;
+  std::string scene;
+  std::string weather = "clear";  // clear, rain, snow, or a documented combination ("rain+fog")
+  std::map<std::string, std::vector<std::string>> splits;  // "train", "test", ...
+  std::optional<std::string> splits_rule;                   // e.g. "llff_every_8"
+  std::optional<Json> generator;  // owned by the generator: {version, seed, spec, stages, ...}
+  std::optional<Json> source;     // imported footage: where the frames came from
+};
+
+struct Dataset {
+  std::string root;
+  DatasetInfo info;
+  std::vector<Camera> cameras;  // in cameras.json order
+
+  const Camera& camera(const std::string& view) const;  // InputError if unknown
+  const std::vector<std::string>& split(const std::string& name) const;  // InputError if absent
+  // "<root>/<folder>/<view><ext>", e.g. path("images", "007") -> ".../images/007.png".
+  std::string path(const std::string& folder, const std::string& view, const std::string& ext = ".png") const;
+};
+
+// The default split rule (LLFF / 3DGS): 0-based index % 8 == 0 is a test view.
+constexpr const char* kLlffSplitRule = "llff_every_8";
+std::map<std::string, std::vector<std::string>> llff_splits(const std::vector<std::string>& views,
+                                                            int every = 8);
+
+// View names must be file-system safe: [A-Za-z0-9._-]+, not starting with '.'.
+bool is_safe_view_name(const std::string& name);
+
+Dataset read_dataset(const std::string& root);
+std::vector<Camera> read_cameras_json(const std::string& path);
+DatasetInfo read_dataset_json(const std::string& path);
+
+Json camera_to_json(const Camera& camera);
+Camera camera_from_json(const JsonReader& reader);
+Json dataset_info_to_json(const DatasetInfo& info);
+
+// Atomic writers.
+void write_cameras_json(const std::string& path, const std::vector<Camera>& cameras);
+void write_dataset_json(const std::string& path, const DatasetInfo& info);
+// Writes dataset.json and cameras.json into root (which must exist), after checking consistency.
+void write_dataset(const Dataset& dataset);
+// Consistency of info and cameras (split names refer to cameras; unique names): InputError otherwise.
+void validate_dataset(const Dataset& dataset, const std::string& where);
+
+}  // namespace weathergs

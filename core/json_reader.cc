@@ -1,0 +1,93 @@
+#include "core/json_reader.h"
+
+#include <fstream>
+#include <sstream>
+
+namespace weathergs {
+
+namespace detail {
+std::string json_type_name(const Json& j) {
+  if (j.is_null()) return "null";
+  if (j.is_boolean()) return "a boolean (" + j.dump() + ")";
+  if (j.is_number()) return "a number (" + j.dump() + ")";
+  if (j.is_string()) return "a string (" + j.dump() + ")";
+  if (j.is_array()) return "an array";
+  return "an object";
+}
+}  // namespace detail
+
+Json read_json_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open file (missing or unreadable)");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  try {
+    return Json::parse(ss.str());
+  } catch (const Json::parse_error& e) {
+    throw InputError(path, std::string("malformed JSON: ") + e.what());
+  }
+}
+
+JsonReader::JsonReader(const Json& value, std::string file, std::string pointer)
+    : value_(&value), file_(std::move(file)), pointer_(std::move(pointer)) {}
+
+JsonReader JsonReader::from_file(const std::string& path) {
+  auto doc = std::make_shared<Json>(read_json_file(path));
+  JsonReader r(*doc, path, "");
+  r.owned_ = doc;
+  return r;
+}
+
+std::string JsonReader::where(const std::string& key) const {
+  std::string p = pointer_;
+  if (!key.empty()) p += "/" + key;
+  if (p.empty()) p = "/";
+  return file_ + ":" + p;
+}
+
+bool JsonReader::has(const std::string& key) const {
+  return value_->is_object() && value_->contains(key);
+}
+
+void JsonReader::fail(const std::string& key, const std::string& expected) const {
+  if (!has(key)) throw InputError(where(key), "missing " + expected);
+  throw InputError(where(key), "expected " + expected + ", got " +
+                                   detail::json_type_name((*value_)[key]));
+}
+
+JsonReader JsonReader::child(const std::string& key) const {
+  if (!value_->is_object()) throw InputError(where(), "expected an object");
+  if (!has(key)) fail(key, "a required key");
+  const Json& c = (*value_)[key];
+  if (!c.is_object() && !c.is_array()) fail(key, "an object or an array");
+  mark(key);
+  JsonReader r(c, file_, pointer_ + "/" + key);
+  r.owned_ = owned_;
+  return r;
+}
+
+JsonReader JsonReader::at(size_t index) const {
+  if (!value_->is_array()) throw InputError(where(), "expected an array");
+  if (index >= value_->size())
+    throw InputError(where(), "index " + std::to_string(index) + " out of range");
+  JsonReader r((*value_)[index], file_, pointer_ + "/" + std::to_string(index));
+  r.owned_ = owned_;
+  return r;
+}
+
+std::vector<std::string> JsonReader::keys() const {
+  std::vector<std::string> k;
+  if (value_->is_object())
+    for (auto it = value_->begin(); it != value_->end(); ++it) k.push_back(it.key());
+  return k;
+}
+
+void JsonReader::finish() const {
+  if (!value_->is_object()) return;
+  std::string unknown;
+  for (auto it = value_->begin(); it != value_->end(); ++it)
+    if (!used_->count(it.key())) unknown += (unknown.empty() ? "" : ", ") + ("'" + it.key() + "'");
+  if (!unknown.empty()) throw InputError(where(), "unknown key(s) " + unknown);
+}
+
+}  // namespace weathergs

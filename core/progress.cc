@@ -1,0 +1,61 @@
+#include "core/progress.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+namespace weathergs {
+
+namespace {
+std::atomic<bool> g_quiet{false};
+}
+void set_quiet(bool quiet) { g_quiet = quiet; }
+bool is_quiet() { return g_quiet; }
+
+ProgressBar::ProgressBar(std::string label, int64_t total)
+    : label_(std::move(label)), total_(total), interactive_(!g_quiet && ::isatty(STDERR_FILENO)),
+      start_(std::chrono::steady_clock::now()), last_draw_(start_) {}
+
+ProgressBar::~ProgressBar() { finish(); }
+
+void ProgressBar::tick(int64_t n) {
+  done_ += n;
+  if (!interactive_) return;
+  auto now = std::chrono::steady_clock::now();
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (now - last_draw_ > std::chrono::milliseconds(100) || done_ >= total_) {
+    last_draw_ = now;
+    draw(false);
+  }
+}
+
+void ProgressBar::set_status(const std::string& status) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  status_ = status;
+}
+
+void ProgressBar::draw(bool final) {
+  double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  int64_t done = done_;
+  double frac = total_ > 0 ? double(done) / double(total_) : 1.0;
+  const int width = 30;
+  int filled = int(frac * width + 0.5);
+  std::string bar(size_t(filled < 0 ? 0 : filled > width ? width : filled), '#');
+  bar.resize(width, '.');
+  double eta = frac > 0 ? secs / frac - secs : 0;
+  std::fprintf(stderr, "\r%s [%s] %lld/%lld %.1fs%s%s %s\033[K", label_.c_str(), bar.c_str(),
+               (long long)done, (long long)total_, secs,
+               final ? "" : " eta ", final ? "" : std::to_string(int(eta)).append("s").c_str(),
+               status_.c_str());
+  if (final) std::fputc('\n', stderr);
+  std::fflush(stderr);
+}
+
+void ProgressBar::finish() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (finished_) return;
+  finished_ = true;
+  if (interactive_) draw(true);
+}
+
+}  // namespace weathergs

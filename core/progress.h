@@ -1,0 +1,36 @@
+// A progress bar for long loops, on stderr. Quiet when stderr is not a terminal or when
+// set_quiet(true) (the CLI's --quiet); then only a final one-line summary is printed unless quiet.
+// Thread-safe: tick() may be called from any worker.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <mutex>
+#include <string>
+
+namespace weathergs {
+
+void set_quiet(bool quiet);
+bool is_quiet();
+
+class ProgressBar {
+ public:
+  ProgressBar(std::string label, int64_t total);
+  ~ProgressBar();
+  void tick(int64_t n = 1);
+  // Free text shown after the counter (e.g. "loss 0.031 psnr 27.4"); thread-safe.
+  void set_status(const std::string& status);
+  void finish();
+
+ private:
+  void draw(bool final);
+  std::string label_;
+  int64_t total_;
+  std::atomic<int64_t> done_{0};
+  std::string status_;
+  std::mutex mutex_;
+  bool interactive_, finished_ = false;
+  std::chrono::steady_clock::time_point start_, last_draw_;
+};
+
+}  // namespace weathergs

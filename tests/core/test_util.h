@@ -1,0 +1,38 @@
+// Helpers shared by tests: a scratch directory removed at the end of the test.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+namespace weathergs::testing {
+
+class TempDir {
+ public:
+  TempDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = std::string("weathergs_") + (info ? info->test_suite_name() : "x") + "_" +
+                       (info ? info->name() : "y") + "_" + std::to_string(::getpid());
+    path_ = std::filesystem::temp_directory_path() / name;
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  std::string path() const { return path_.string(); }
+  std::string operator/(const std::string& f) const { return (path_ / f).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// Number of entries in a directory (to assert that no temp/partial file was left behind).
+inline int count_entries(const std::string& dir) {
+  int n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++n;
+  return n;
+}
+
+}  // namespace weathergs::testing
