@@ -5,6 +5,8 @@ set(WEATHERGS_ALLOWED_DEPS_core "")
 set(WEATHERGS_ALLOWED_DEPS_evaluator "weathergs_core")
 set(WEATHERGS_ALLOWED_DEPS_generator "weathergs_core")
 set(WEATHERGS_ALLOWED_DEPS_reconstruction "weathergs_core")
+# pipeline orchestrates whole-benchmark jobs (Blender, the generator, COLMAP): one layer above the parts.
+set(WEATHERGS_ALLOWED_DEPS_pipeline "weathergs_core;weathergs_generator")
 
 # weathergs_add_library(PART part SOURCES ... [DEPS weathergs_x ...] [EXTERNAL ...])
 function(weathergs_add_library)

@@ -159,3 +159,51 @@ TEST(DatasetTest, UnsafeViewNamesRejected) {
 
 }  // namespace
 }  // namespace weathergs
+
+#include "core/colmap_model.h"
+
+namespace weathergs {
+namespace {
+
+TEST(ColmapModelTest, TextRoundTripKeepsPoses) {
+  TempDir dir;
+  std::vector<Camera> cams = {make_camera("000"), make_camera("001")};
+  cams[1].camera_from_world.topLeftCorner<3, 3>() =
+      Eigen::AngleAxisd(3.0, Eigen::Vector3d(1, 0.3, -0.2).normalized()).toRotationMatrix();  // w < 0 case
+  ColmapModel m = colmap_model_from_cameras(cams);
+  ColmapPoint3D p;
+  p.id = 5;
+  p.xyz = {1, 2, 3};
+  p.rgb = {255, 128, 0};
+  p.error = 0.25;
+  p.track = {{1, 0}, {2, 0}};
+  m.points.push_back(p);
+  m.images[0].points2d.emplace_back(10.5, 20.25, 5);
+  write_colmap_text(dir.path(), m);
+  ColmapModel back = read_colmap_text(dir.path());
+  ASSERT_EQ(back.images.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_LT((back.images[i].camera_from_world - cams[i].camera_from_world).norm(), 1e-12);
+    EXPECT_EQ(back.images[i].name, cams[i].name + ".png");
+  }
+  ASSERT_EQ(back.images[0].points2d.size(), 1u);
+  EXPECT_TRUE(back.images[1].points2d.empty());
+  ASSERT_EQ(back.points.size(), 1u);
+  EXPECT_EQ(back.points[0].xyz, p.xyz);
+  EXPECT_EQ(back.points[0].track, p.track);
+  EXPECT_DOUBLE_EQ(back.cameras[1].fx, 520);
+}
+
+TEST(ColmapModelTest, MalformedLineNamesFileAndLine) {
+  TempDir dir;
+  write_file_atomic(dir / "points3D.txt", "# header\n1 0 0 0 255 255 255 0\n2 0 0 zero 1 1 1 0\n");
+  try {
+    read_colmap_points3d(dir / "points3D.txt");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("points3D.txt:3"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace weathergs
