@@ -43,6 +43,17 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    // Name an unknown command instead of CLI11's generic "A subcommand is required".
+    if (app.get_subcommands().empty()) {
+      for (int i = 1; i < argc; ++i) {
+        std::string arg = argv[i];
+        if (arg == "-j" || arg == "--threads") { ++i; continue; }
+        if (!arg.empty() && arg[0] != '-') {
+          std::fprintf(stderr, "error: unknown command '%s'; run 'weathergs --help' for the list\n", arg.c_str());
+          return kExitBadInput;
+        }
+      }
+    }
     int code = app.exit(e);
     return code == 0 ? kExitOk : kExitBadInput;
   }

@@ -68,7 +68,7 @@ Dataset make_dataset(const std::string& root) {
   d.root = root;
   std::vector<std::string> names;
   for (int i = 0; i < 10; ++i) {
-    char n[8];
+    char n[16];
     std::snprintf(n, sizeof n, "%03d", i);
     d.cameras.push_back(make_camera(n));
     names.push_back(n);

@@ -15,7 +15,7 @@ class TempDir {
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     std::string name = std::string("weathergs_") + (info ? info->test_suite_name() : "x") + "_" +
-                       (info ? info->name() : "y") + "_" + std::to_string(::getpid());
+                       (info ? info->name() : "y") + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter()++);
     path_ = std::filesystem::temp_directory_path() / name;
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
@@ -25,6 +25,10 @@ class TempDir {
   std::string operator/(const std::string& f) const { return (path_ / f).string(); }
 
  private:
+  static int& counter() {
+    static int n = 0;
+    return n;
+  }
   std::filesystem::path path_;
 };
 
@@ -33,6 +37,32 @@ inline int count_entries(const std::string& dir) {
   int n = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++n;
   return n;
+}
+
+}  // namespace weathergs::testing
+
+#include <array>
+#include <cstdio>
+#include <sys/wait.h>
+
+namespace weathergs::testing {
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+// Runs a shell command, capturing its combined output and exit code.
+inline CommandResult run_command(const std::string& command) {
+  CommandResult r;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
 }
 
 }  // namespace weathergs::testing

@@ -1,0 +1,50 @@
+// weathergs evaluate: score a method's renders against a dataset's clean ground truth.
+#include <cstdio>
+#include <filesystem>
+
+#include "apps/command.h"
+#include "apps/evaluator_flags.h"
+
+namespace weathergs::cli {
+namespace {
+
+struct EvaluateArgs {
+  std::string gt, renders, method, split = "test", mask_dir, output;
+  ScoringFlags scoring;
+};
+
+int run_evaluate(const EvaluateArgs& args) {
+  evaluator::EvaluateOptions o;
+  o.gt_dataset = args.gt;
+  o.renders_dir = args.renders;
+  o.method = args.method;
+  o.split = args.split;
+  if (!args.mask_dir.empty()) o.mask_dir = args.mask_dir;
+  o.scoring = args.scoring.options();
+  evaluator::Results r = evaluator::evaluate(o);
+  evaluator::write_results(args.output, r);
+  std::printf("%s on %s (%zu %s views): PSNR %s  SSIM %s  LPIPS %s\nwrote %s\n", r.method.c_str(), r.dataset.c_str(),
+              r.per_view.size(), r.protocol.split.c_str(), evaluator::format_metric(r.metrics.psnr, 2).c_str(),
+              evaluator::format_metric(r.metrics.ssim, 4).c_str(),
+              r.metrics.lpips ? evaluator::format_metric(*r.metrics.lpips, 4).c_str() : "skipped",
+              args.output.c_str());
+  return kExitOk;
+}
+
+Command make_evaluate(CLI::App& root) {
+  auto args = std::make_shared<EvaluateArgs>();
+  CLI::App* sub = root.add_subcommand("evaluate", "Score renders of a split against the dataset's clean ground truth");
+  sub->add_option("--gt", args->gt, "Ground-truth dataset folder (with clean/)")->required();
+  sub->add_option("--renders", args->renders, "Folder with <view>.png per split view (+ optional info.json)")->required();
+  sub->add_option("--method", args->method, "Method name (default: \"method\" from the renders' info.json)");
+  sub->add_option("--split", args->split, "Split to score")->capture_default_str();
+  sub->add_option("--mask-dir", args->mask_dir, "Masks <view>.png (255 = exclude): metrics over valid pixels only");
+  sub->add_option("-o,--output", args->output, "Results JSON to write (atomically)")->required();
+  args->scoring.add_to(sub);
+  return {sub, [args] { return run_evaluate(*args); }};
+}
+
+}  // namespace
+}  // namespace weathergs::cli
+
+WGS_REGISTER_COMMAND(evaluate, weathergs::cli::make_evaluate)

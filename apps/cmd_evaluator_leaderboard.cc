@@ -1,0 +1,42 @@
+// weathergs leaderboard: the paper's tables from any number of results files.
+#include <cstdio>
+
+#include "apps/command.h"
+#include "core/atomic_file.h"
+#include "evaluator/leaderboard.h"
+
+namespace weathergs::cli {
+namespace {
+
+struct LeaderboardArgs {
+  std::vector<std::string> results;
+  std::string format = "md", output;
+};
+
+int run_leaderboard(const LeaderboardArgs& args) {
+  const evaluator::TableFormat format = evaluator::parse_table_format(args.format);
+  std::vector<evaluator::LoadedResults> loaded;
+  for (const auto& p : args.results) loaded.push_back({p, evaluator::read_results(p)});
+  const std::string text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded), format);
+  if (args.output.empty() || args.output == "-") {
+    std::fputs(text.c_str(), stdout);
+  } else {
+    write_file_atomic(args.output, text);
+    std::fprintf(stderr, "wrote %s\n", args.output.c_str());
+  }
+  return kExitOk;
+}
+
+Command make_leaderboard(CLI::App& root) {
+  auto args = std::make_shared<LeaderboardArgs>();
+  CLI::App* sub = root.add_subcommand("leaderboard", "Build leaderboard tables (one per weather) from results files");
+  sub->add_option("results", args->results, "Results JSON files")->required();
+  sub->add_option("--format", args->format, "md, csv, latex or html")->capture_default_str();
+  sub->add_option("-o,--output", args->output, "Output file (default: stdout)");
+  return {sub, [args] { return run_leaderboard(*args); }};
+}
+
+}  // namespace
+}  // namespace weathergs::cli
+
+WGS_REGISTER_COMMAND(leaderboard, weathergs::cli::make_leaderboard)

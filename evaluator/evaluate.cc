@@ -1,0 +1,126 @@
+#include "evaluator/evaluate.h"
+
+#include <filesystem>
+#include <set>
+
+#include "core/dataset.h"
+#include "core/parallel.h"
+#include "core/progress.h"
+#include "core/sha256.h"
+
+namespace weathergs::evaluator {
+
+namespace fs = std::filesystem;
+
+MetricValues score_pair(const Image& render, const Image& gt, const ScoringOptions& o, Lpips* lpips,
+                        const Image* mask, const std::string& where) {
+  // Both images become RGB, sRGB-encoded (metrics are defined on display values), then optionally
+  // quantized to 8 bits.
+  Image a = to_srgb(to_rgb(render)), b = to_srgb(to_rgb(gt));
+  require_comparable(a, b, mask, where);
+  require_finite(a, where + " (render)");
+  require_finite(b, where + " (ground truth)");
+  if (o.quantize_uint8) {
+    a = quantize_uint8(a);
+    b = quantize_uint8(b);
+  } else {
+    for (Image* im : {&a, &b})
+      for (float& v : im->data) v = std::min(1.f, std::max(0.f, v));
+  }
+  MetricValues m;
+  try {
+    m.psnr = psnr(a, b, mask);
+    m.ssim = ssim(a, b, o.ssim, mask);
+    if (o.lpips) {
+      WGS_CHECK(lpips != nullptr);
+      m.lpips = lpips->distance(a, b);
+    }
+  } catch (const InputError& e) {
+    throw InputError(where, e.problem());
+  }
+  return m;
+}
+
+namespace {
+
+std::string hash_files(const std::vector<std::string>& views, const std::vector<std::string>& paths) {
+  // sha256 over "view sha256(file)\n" lines in split order: names and contents both count.
+  Sha256 h;
+  for (size_t i = 0; i < views.size(); ++i) h.update(views[i] + " " + sha256_file(paths[i]) + "\n");
+  return h.hex_digest();
+}
+
+}  // namespace
+
+Results evaluate(const EvaluateOptions& o) {
+  const Dataset ds = read_dataset(o.gt_dataset);
+  const std::vector<std::string>& views = ds.split(o.split);
+  if (views.empty()) throw InputError(o.gt_dataset + "/dataset.json:/splits/" + o.split, "split is empty");
+  if (!fs::is_directory(fs::path(o.gt_dataset) / o.gt_folder))
+    throw InputError(o.gt_dataset, "no " + o.gt_folder + "/ folder: this dataset has no clean ground truth "
+                                       "(imported real footage cannot be scored)");
+  if (!fs::is_directory(o.renders_dir)) throw InputError(o.renders_dir, "renders directory does not exist");
+
+  // Renders must be exactly the split's views.
+  std::set<std::string> expected(views.begin(), views.end()), found;
+  for (const auto& e : fs::directory_iterator(o.renders_dir))
+    if (e.path().extension() == ".png") found.insert(e.path().stem().string());
+  std::string missing, extra;
+  for (const auto& v : views)
+    if (!found.count(v)) missing += (missing.empty() ? "" : ", ") + v;
+  for (const auto& v : found)
+    if (!expected.count(v)) extra += (extra.empty() ? "" : ", ") + v;
+  if (!missing.empty())
+    throw InputError(o.renders_dir, "missing renders for " + o.split + " view(s): " + missing);
+  if (!extra.empty())
+    throw InputError(o.renders_dir, "render(s) for view(s) not in the " + o.split + " split: " + extra);
+
+  Results r;
+  r.method = o.method;
+  const std::string info_path = (fs::path(o.renders_dir) / "info.json").string();
+  if (fs::exists(info_path)) {
+    r.method_info = read_json_file(info_path);
+    if (!r.method_info.is_object()) throw InputError(info_path, "expected a JSON object");
+    if (r.method.empty() && r.method_info.contains("method") && r.method_info["method"].is_string())
+      r.method = r.method_info["method"].get<std::string>();
+  }
+  if (r.method.empty())
+    throw InputError(o.renders_dir, "no method name: pass --method NAME or put \"method\" in info.json");
+  r.dataset = ds.info.name;
+  r.scene = ds.info.scene;
+  r.weather = ds.info.weather;
+  r.protocol.ssim = o.scoring.ssim.protocol_name();
+  r.protocol.lpips = o.scoring.lpips ? std::optional<std::string>("alex_v0.1") : std::nullopt;
+  r.protocol.quantize_uint8 = o.scoring.quantize_uint8;
+  r.protocol.split = o.split;
+  if (o.mask_dir) r.protocol.mask = fs::path(*o.mask_dir).lexically_normal().filename().string();
+
+  std::unique_ptr<Lpips> lpips;
+  if (o.scoring.lpips) lpips = std::make_unique<Lpips>(find_lpips_model(o.scoring.lpips_model));
+
+  std::vector<std::string> render_paths, gt_paths;
+  for (const auto& v : views) {
+    render_paths.push_back((fs::path(o.renders_dir) / (v + ".png")).string());
+    gt_paths.push_back(ds.path(o.gt_folder, v));
+  }
+  std::vector<MetricValues> values(views.size());
+  ProgressBar bar("evaluate " + r.method, int64_t(views.size()));
+  parallel_for(0, int64_t(views.size()), [&](int64_t i) {
+    const std::string& v = views[size_t(i)];
+    Image render = read_image(render_paths[size_t(i)]);
+    Image gt = read_image(gt_paths[size_t(i)]);
+    Image mask;
+    if (o.mask_dir) mask = read_mask((fs::path(*o.mask_dir) / (v + ".png")).string());
+    values[size_t(i)] = score_pair(render, gt, o.scoring, lpips.get(), o.mask_dir ? &mask : nullptr,
+                                   "view '" + v + "' (" + render_paths[size_t(i)] + " vs " + gt_paths[size_t(i)] + ")");
+    bar.tick();
+  });
+  bar.finish();
+  for (size_t i = 0; i < views.size(); ++i) r.per_view.emplace_back(views[i], values[i]);
+  r.metrics = mean_metrics(r.per_view);
+  r.sha256_renders = hash_files(views, render_paths);
+  r.sha256_ground_truth = hash_files(views, gt_paths);
+  return r;
+}
+
+}  // namespace weathergs::evaluator

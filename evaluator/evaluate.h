@@ -1,0 +1,41 @@
+// Scoring a method's renders against a dataset's clean ground truth (`weathergs evaluate`).
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "core/image.h"
+#include "evaluator/lpips.h"
+#include "evaluator/metrics.h"
+#include "evaluator/results.h"
+
+namespace weathergs::evaluator {
+
+// How two images are scored (the evaluation protocol). Every choice is recorded in the results.
+struct ScoringOptions {
+  bool quantize_uint8 = true;  // quantize both images to 8-bit sRGB first (as NerfBaselines does)
+  SsimOptions ssim;            // default: 11x11 Gaussian, sigma 1.5, valid padding
+  bool lpips = true;           // false: skipped explicitly (--no-lpips), recorded as lpips: null
+  std::optional<std::string> lpips_model;  // --lpips-model; else env / default search (lpips.h)
+};
+
+// Scores one pair (sRGB or linear, any 1..4 channels: converted to RGB sRGB first). `lpips` may be
+// null when options.lpips is false. `where` names the pair in errors.
+MetricValues score_pair(const Image& render, const Image& ground_truth, const ScoringOptions& options,
+                        Lpips* lpips, const Image* exclude_mask, const std::string& where);
+
+struct EvaluateOptions {
+  std::string gt_dataset;      // dataset folder with clean/<view>.png
+  std::string renders_dir;     // <renders>/<view>.png for every view of the split (+ optional info.json)
+  std::string method;          // empty: taken from <renders>/info.json "method"
+  std::string split = "test";
+  std::string gt_folder = "clean";  // ground truth images inside the dataset
+  std::optional<std::string> mask_dir;  // masks (255 = exclude) named <view>.png
+  ScoringOptions scoring;
+};
+
+// Scores every view of the split in parallel. Missing or extra renders, unreadable images, size
+// mismatches and missing masks are InputErrors naming the view.
+Results evaluate(const EvaluateOptions& options);
+
+}  // namespace weathergs::evaluator

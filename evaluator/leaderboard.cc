@@ -1,0 +1,350 @@
+#include "evaluator/leaderboard.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+namespace weathergs::evaluator {
+
+TableFormat parse_table_format(const std::string& name) {
+  if (name == "md" || name == "markdown") return TableFormat::kMarkdown;
+  if (name == "csv") return TableFormat::kCsv;
+  if (name == "latex" || name == "tex") return TableFormat::kLatex;
+  if (name == "html") return TableFormat::kHtml;
+  throw InputError("--format", "unknown table format '" + name + "' (expected md, csv, latex or html)");
+}
+
+namespace {
+
+template <typename T>
+size_t index_of(std::vector<T>& v, const T& x) {
+  auto it = std::find(v.begin(), v.end(), x);
+  if (it != v.end()) return size_t(it - v.begin());
+  v.push_back(x);
+  return v.size() - 1;
+}
+
+// Mean and (population) standard deviation; an infinite PSNR makes the mean +inf and the spread 0.
+void mean_std(const std::vector<double>& x, double& mean, double& sd) {
+  mean = 0;
+  for (double v : x) mean += v;
+  mean /= double(x.size());
+  sd = 0;
+  if (std::isinf(mean)) return;
+  for (double v : x) sd += (v - mean) * (v - mean);
+  sd = std::sqrt(sd / double(x.size()));
+}
+
+CellStats stats(const std::vector<const Results*>& rs) {
+  CellStats c;
+  c.n = int(rs.size());
+  if (rs.empty()) return c;
+  std::vector<double> p, s, l;
+  c.has_lpips = true;
+  for (const Results* r : rs) {
+    p.push_back(r->metrics.psnr);
+    s.push_back(r->metrics.ssim);
+    if (r->metrics.lpips) l.push_back(*r->metrics.lpips); else c.has_lpips = false;
+  }
+  mean_std(p, c.psnr, c.psnr_std);
+  mean_std(s, c.ssim, c.ssim_std);
+  if (c.has_lpips) mean_std(l, c.lpips, c.lpips_std);
+  return c;
+}
+
+}  // namespace
+
+std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results) {
+  if (results.empty()) throw InputError("leaderboard", "no results files given");
+  std::vector<std::string> weathers;
+  std::map<std::string, std::vector<const LoadedResults*>> by_weather;
+  for (const auto& lr : results) {
+    index_of(weathers, lr.results.weather);
+    by_weather[lr.results.weather].push_back(&lr);
+  }
+  std::vector<LeaderboardTable> tables;
+  for (const std::string& w : weathers) {
+    LeaderboardTable t;
+    t.weather = w;
+    const auto& group = by_weather[w];
+    t.protocol = group.front()->results.protocol;
+    std::map<std::pair<size_t, size_t>, std::vector<const Results*>> cell_results;
+    for (const LoadedResults* lr : group) {
+      if (!(lr->results.protocol == t.protocol))
+        throw InputError(lr->path, "protocol differs from " + group.front()->path + " (" +
+                                       lr->results.protocol.to_string() + " vs " + t.protocol.to_string() +
+                                       "): results scored differently cannot share a table");
+      size_t m = index_of(t.methods, lr->results.method);
+      size_t s = index_of(t.scenes, lr->results.scene.empty() ? lr->results.dataset : lr->results.scene);
+      cell_results[{m, s}].push_back(&lr->results);
+    }
+    t.cells.assign(t.methods.size(), std::vector<CellStats>(t.scenes.size()));
+    for (auto& [key, rs] : cell_results) t.cells[key.first][key.second] = stats(rs);
+    t.average.resize(t.methods.size());
+    for (size_t m = 0; m < t.methods.size(); ++m) {
+      CellStats avg;
+      bool complete = true, lp = true;
+      for (size_t s = 0; s < t.scenes.size(); ++s) {
+        const CellStats& c = t.cells[m][s];
+        if (c.n == 0) { complete = false; break; }
+        avg.psnr += c.psnr; avg.ssim += c.ssim; avg.lpips += c.lpips;
+        lp = lp && c.has_lpips;
+      }
+      if (complete) {
+        const double k = double(t.scenes.size());
+        avg.n = 1;
+        avg.psnr /= k; avg.ssim /= k; avg.lpips /= k;
+        avg.has_lpips = lp;
+      } else {
+        avg = CellStats{};
+      }
+      t.average[m] = avg;
+    }
+    tables.push_back(std::move(t));
+  }
+  return tables;
+}
+
+namespace {
+
+struct Column {
+  std::string group;   // scene name or "Average"
+  int metric;          // 0 psnr, 1 ssim, 2 lpips
+};
+const char* kMetricName[3] = {"PSNR", "SSIM", "LPIPS"};
+const int kDecimals[3] = {2, 3, 3};
+const bool kHigherBetter[3] = {true, true, false};
+
+std::vector<Column> columns(const LeaderboardTable& t) {
+  std::vector<Column> cols;
+  for (const auto& s : t.scenes)
+    for (int k = 0; k < 3; ++k) cols.push_back({s, k});
+  for (int k = 0; k < 3; ++k) cols.push_back({"Average", k});
+  return cols;
+}
+
+const CellStats& cell(const LeaderboardTable& t, size_t m, size_t col) {
+  const size_t s = col / 3;
+  return s < t.scenes.size() ? t.cells[m][s] : t.average[m];
+}
+
+bool present(const CellStats& c, int k) { return c.n > 0 && (k != 2 || c.has_lpips); }
+double value(const CellStats& c, int k) { return k == 0 ? c.psnr : k == 1 ? c.ssim : c.lpips; }
+double spread(const CellStats& c, int k) { return k == 0 ? c.psnr_std : k == 1 ? c.ssim_std : c.lpips_std; }
+
+// Best = highest PSNR/SSIM, lowest LPIPS, compared at the printed precision so ties are all bold.
+std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
+  const auto cols = columns(t);
+  std::vector<std::vector<bool>> best(t.methods.size(), std::vector<bool>(cols.size(), false));
+  for (size_t col = 0; col < cols.size(); ++col) {
+    const int k = cols[col].metric;
+    std::string best_text;
+    double best_v = 0;
+    bool any = false;
+    for (size_t m = 0; m < t.methods.size(); ++m) {
+      const CellStats& c = cell(t, m, col);
+      if (!present(c, k)) continue;
+      double v = value(c, k);
+      if (!any || (kHigherBetter[k] ? v > best_v : v < best_v)) best_v = v;
+      any = true;
+    }
+    if (!any) continue;
+    best_text = format_metric(best_v, kDecimals[k]);
+    for (size_t m = 0; m < t.methods.size(); ++m) {
+      const CellStats& c = cell(t, m, col);
+      best[m][col] = present(c, k) && format_metric(value(c, k), kDecimals[k]) == best_text;
+    }
+  }
+  return best;
+}
+
+std::string cell_text(const CellStats& c, int k, const char* pm) {
+  if (!present(c, k)) return "";
+  std::string s = format_metric(value(c, k), kDecimals[k]);
+  if (c.n > 1) s += std::string(pm) + format_metric(spread(c, k), kDecimals[k]);
+  return s;
+}
+
+std::string weather_title(const std::string& w) {
+  if (w.empty()) return "Weather: (unspecified)";
+  std::string t = w;
+  t[0] = char(std::toupper(static_cast<unsigned char>(t[0])));
+  return "Weather: " + t;
+}
+
+std::string csv_escape(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string o = "\"";
+  for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return o + "\"";
+}
+
+std::string latex_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (std::string("&%$#_{}").find(c) != std::string::npos) o += '\\';
+    o += c;
+  }
+  return o;
+}
+
+std::string html_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+bool any_repeats(const LeaderboardTable& t) {
+  for (const auto& row : t.cells)
+    for (const auto& c : row)
+      if (c.n > 1) return true;
+  return false;
+}
+
+std::string protocol_note(const LeaderboardTable& t) {
+  return "Protocol: " + t.protocol.to_string() + ". Best per column in bold." +
+         (any_repeats(t) ? " Cells with repeated runs show mean ± standard deviation." : "") +
+         " Average: mean over scenes, only for methods with every scene.";
+}
+
+void markdown(std::ostringstream& o, const LeaderboardTable& t) {
+  const auto cols = columns(t);
+  const auto best = best_flags(t);
+  o << "## " << weather_title(t.weather) << "\n\n| Method |";
+  for (const auto& c : cols) o << " " << c.group << " " << kMetricName[c.metric] << (kHigherBetter[c.metric] ? " ↑" : " ↓") << " |";
+  o << "\n|---|";
+  for (size_t i = 0; i < cols.size(); ++i) o << "---:|";
+  o << "\n";
+  for (size_t m = 0; m < t.methods.size(); ++m) {
+    o << "| " << t.methods[m] << " |";
+    for (size_t col = 0; col < cols.size(); ++col) {
+      std::string s = cell_text(cell(t, m, col), cols[col].metric, " ± ");
+      if (s.empty()) s = "–";
+      else if (best[m][col]) s = "**" + s + "**";
+      o << " " << s << " |";
+    }
+    o << "\n";
+  }
+  o << "\n" << protocol_note(t) << "\n\n";
+}
+
+void csv(std::ostringstream& o, const LeaderboardTable& t, bool header) {
+  const auto cols = columns(t);
+  if (header) {
+    o << "weather,method";
+    for (const auto& c : cols) {
+      std::string m = kMetricName[c.metric];
+      std::transform(m.begin(), m.end(), m.begin(), ::tolower);
+      o << "," << csv_escape(c.group + "_" + m);
+      if (any_repeats(t)) o << "," << csv_escape(c.group + "_" + m + "_std");
+    }
+    o << "\n";
+  }
+  for (size_t m = 0; m < t.methods.size(); ++m) {
+    o << csv_escape(t.weather) << "," << csv_escape(t.methods[m]);
+    for (size_t col = 0; col < cols.size(); ++col) {
+      const CellStats& c = cell(t, m, col);
+      const int k = cols[col].metric;
+      o << "," << (present(c, k) ? format_metric(value(c, k), 6) : "");
+      if (any_repeats(t)) o << "," << (present(c, k) && c.n > 1 ? format_metric(spread(c, k), 6) : "");
+    }
+    o << "\n";
+  }
+}
+
+void latex(std::ostringstream& o, const LeaderboardTable& t) {
+  const auto cols = columns(t);
+  const auto best = best_flags(t);
+  const size_t groups = t.scenes.size() + 1;
+  o << "% " << weather_title(t.weather) << ". " << protocol_note(t) << "\n";
+  o << "\\begin{table}[t]\n\\centering\n\\caption{" << latex_escape(weather_title(t.weather)) << "}\n";
+  o << "\\resizebox{\\linewidth}{!}{%\n\\begin{tabular}{l" << std::string(cols.size(), 'c') << "}\n\\toprule\n";
+  o << "Method";
+  for (size_t g = 0; g < groups; ++g)
+    o << " & \\multicolumn{3}{c}{" << latex_escape(g < t.scenes.size() ? t.scenes[g] : "Average") << "}";
+  o << " \\\\\n";
+  for (size_t g = 0; g < groups; ++g) o << "\\cmidrule(lr){" << 2 + 3 * g << "-" << 4 + 3 * g << "}";
+  o << "\n";
+  for (size_t g = 0; g < groups; ++g) o << " & PSNR$\\uparrow$ & SSIM$\\uparrow$ & LPIPS$\\downarrow$";
+  o << " \\\\\n\\midrule\n";
+  for (size_t m = 0; m < t.methods.size(); ++m) {
+    o << latex_escape(t.methods[m]);
+    for (size_t col = 0; col < cols.size(); ++col) {
+      std::string s = cell_text(cell(t, m, col), cols[col].metric, "$\\pm$");
+      if (s == "+inf") s = "$+\\infty$";
+      if (s.empty()) s = "--";
+      else if (best[m][col]) s = "\\textbf{" + s + "}";
+      o << " & " << s;
+    }
+    o << " \\\\\n";
+  }
+  o << "\\bottomrule\n\\end{tabular}}\n\\end{table}\n\n";
+}
+
+void html(std::ostringstream& o, const LeaderboardTable& t) {
+  const auto cols = columns(t);
+  const auto best = best_flags(t);
+  o << "<h2>" << html_escape(weather_title(t.weather)) << "</h2>\n<table>\n<thead>\n<tr><th rowspan=\"2\">Method</th>";
+  for (size_t g = 0; g <= t.scenes.size(); ++g)
+    o << "<th colspan=\"3\" class=\"group\">" << html_escape(g < t.scenes.size() ? t.scenes[g] : "Average") << "</th>";
+  o << "</tr>\n<tr>";
+  for (const auto& c : cols)
+    o << "<th>" << kMetricName[c.metric] << (kHigherBetter[c.metric] ? "&thinsp;&uarr;" : "&thinsp;&darr;") << "</th>";
+  o << "</tr>\n</thead>\n<tbody>\n";
+  for (size_t m = 0; m < t.methods.size(); ++m) {
+    o << "<tr><td class=\"method\">" << html_escape(t.methods[m]) << "</td>";
+    for (size_t col = 0; col < cols.size(); ++col) {
+      std::string s = cell_text(cell(t, m, col), cols[col].metric, " &plusmn; ");
+      if (s.empty()) s = "&ndash;";
+      o << (cols[col].metric == 0 ? "<td class=\"first\">" : "<td>") << (best[m][col] ? "<b>" + s + "</b>" : s) << "</td>";
+    }
+    o << "</tr>\n";
+  }
+  o << "</tbody>\n</table>\n<p class=\"note\">" << html_escape(protocol_note(t)) << "</p>\n";
+}
+
+}  // namespace
+
+std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format) {
+  std::ostringstream o;
+  switch (format) {
+    case TableFormat::kMarkdown:
+      o << "# Leaderboard\n\n";
+      for (const auto& t : tables) markdown(o, t);
+      break;
+    case TableFormat::kCsv:
+      for (size_t i = 0; i < tables.size(); ++i) {
+        if (i) o << "\n";
+        csv(o, tables[i], true);
+      }
+      break;
+    case TableFormat::kLatex:
+      o << "% Generated by weathergs leaderboard; needs \\usepackage{booktabs,graphicx}\n";
+      for (const auto& t : tables) latex(o, t);
+      break;
+    case TableFormat::kHtml:
+      o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>weathergs leaderboard</title>\n"
+           "<style>\nbody{font-family:system-ui,sans-serif;margin:2em;color:#222}\n"
+           "table{border-collapse:collapse;margin-bottom:0.5em}\n"
+           "th,td{padding:4px 8px;text-align:right;font-variant-numeric:tabular-nums}\n"
+           "thead th{border-bottom:1px solid #444}th.group{border-bottom:1px solid #999}\n"
+           "td.method,th[rowspan]{text-align:left}td.first,th.group{border-left:1px solid #ccc}\n"
+           "tbody tr:nth-child(even){background:#f4f4f4}p.note{color:#666;font-size:0.9em}\n"
+           "</style>\n</head>\n<body>\n<h1>Leaderboard</h1>\n";
+      for (const auto& t : tables) html(o, t);
+      o << "</body>\n</html>\n";
+      break;
+  }
+  return o.str();
+}
+
+}  // namespace weathergs::evaluator

@@ -1,0 +1,44 @@
+// Leaderboards in the layout of the WeatherGS paper's tables: one table per weather, rows = methods,
+// column groups = scenes (PSNR up, SSIM up, LPIPS down) plus an Average group, best value per column
+// in bold. Repeated results of one (method, scene, weather), e.g. several seeds, are averaged and
+// shown with their standard deviation and count.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "evaluator/results.h"
+
+namespace weathergs::evaluator {
+
+enum class TableFormat { kMarkdown, kCsv, kLatex, kHtml };
+TableFormat parse_table_format(const std::string& name);  // md|csv|latex|html, else InputError
+
+struct LoadedResults {
+  std::string path;
+  Results results;
+};
+
+// One cell: the mean over repeated results and, when there are several, their spread.
+struct CellStats {
+  int n = 0;
+  double psnr = 0, ssim = 0, lpips = 0;
+  double psnr_std = 0, ssim_std = 0, lpips_std = 0;
+  bool has_lpips = false;
+};
+
+struct LeaderboardTable {
+  std::string weather;
+  std::vector<std::string> scenes;   // order of first appearance
+  std::vector<std::string> methods;  // order of first appearance
+  // cells[method][scene]; n == 0 when the method has no result for that scene.
+  std::vector<std::vector<CellStats>> cells;
+  std::vector<CellStats> average;    // per method: mean over scenes; n == 0 unless all scenes present
+  Protocol protocol;
+};
+
+// Groups results into tables. Results in one table must share a protocol (InputError naming files).
+std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results);
+std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format);
+
+}  // namespace weathergs::evaluator

@@ -1,0 +1,46 @@
+// LPIPS v0.1 (Zhang et al. 2018) with the AlexNet trunk, run through OpenCV's dnn module from the
+// ONNX export in ../shared/models/lpips (see that README for the exact conventions).
+//
+// Model lookup, in order: an explicit path (--lpips-model), the environment variable
+// WEATHERGS_LPIPS_MODEL, then default locations: <source tree>/../shared/models/lpips,
+// ./shared/models/lpips and ../shared/models/lpips. A path may name the .onnx file or its folder.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+
+namespace weathergs::evaluator {
+
+constexpr const char* kLpipsModelFile = "lpips_alex_v0.1.onnx";
+constexpr const char* kLpipsEnvVar = "WEATHERGS_LPIPS_MODEL";
+// Smallest side AlexNet-LPIPS can score: conv1 (11x11, stride 4, pad 2) and two 3x3/2 max-pools
+// need an input of at least 31 pixels.
+constexpr int kLpipsMinSide = 31;
+
+// Returns the model file to use. Throws InputError listing every path searched and how to provide
+// the model when none exists.
+std::string find_lpips_model(const std::optional<std::string>& explicit_path);
+
+class Lpips {
+ public:
+  explicit Lpips(const std::string& onnx_path);
+  ~Lpips();
+  const std::string& model_path() const { return path_; }
+
+  // LPIPS distance of two RGB images with sRGB-encoded values in [0, 1] (the network sees 2 v - 1,
+  // i.e. uint8 / 127.5 - 1). Thread-safe (serialized; OpenCV parallelizes inside each layer).
+  double distance(const Image& a, const Image& b);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string path_;
+  std::mutex mutex_;
+};
+
+}  // namespace weathergs::evaluator

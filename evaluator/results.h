@@ -1,0 +1,56 @@
+// The results format of DATASET_FORMAT.md ("weathergs-results", version 1), read strictly.
+//
+// PSNR of identical images is +infinity. JSON has no infinity, so it is written as
+// "psnr": null together with "psnr_infinite": true (documented in docs/evaluator.md); readers turn
+// that back into +inf. A skipped LPIPS (--no-lpips) is "lpips": null and protocol.lpips = null.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/json_reader.h"
+
+namespace weathergs::evaluator {
+
+struct MetricValues {
+  double psnr = 0;                 // may be +inf
+  double ssim = 0;
+  std::optional<double> lpips;     // absent when LPIPS was skipped
+};
+
+struct Protocol {
+  std::string ssim = "gaussian11_sigma1.5_valid";
+  std::optional<std::string> lpips = std::string("alex_v0.1");  // nullopt: skipped (--no-lpips)
+  bool quantize_uint8 = true;
+  std::string split = "test";
+  std::optional<std::string> mask;  // mask folder name when masked metrics were used
+  bool operator==(const Protocol& o) const {
+    return ssim == o.ssim && lpips == o.lpips && quantize_uint8 == o.quantize_uint8 && split == o.split &&
+           mask == o.mask;
+  }
+  std::string to_string() const;
+};
+
+struct Results {
+  std::string method, dataset, scene, weather;
+  Protocol protocol;
+  MetricValues metrics;  // mean over views of the per-view values
+  std::vector<std::pair<std::string, MetricValues>> per_view;  // split order
+  Json method_info = Json::object();
+  std::string sha256_renders, sha256_ground_truth;
+};
+
+// Mean of per-view values (PSNR averaged per view, as 3DGS reports it; +inf if any view is +inf).
+MetricValues mean_metrics(const std::vector<std::pair<std::string, MetricValues>>& per_view);
+
+Json results_to_json(const Results& r);
+Results results_from_json(const JsonReader& reader);
+Results read_results(const std::string& path);
+void write_results(const std::string& path, const Results& r);  // atomic
+
+// Formats a metric for text output: "+inf" for infinite PSNR, fixed decimals otherwise.
+std::string format_metric(double v, int decimals);
+
+}  // namespace weathergs::evaluator

@@ -1,0 +1,227 @@
+// End-to-end tests of the evaluator commands through the `weathergs` binary: exit codes, messages,
+// and that failed runs leave no output behind.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "core/image.h"
+#include "core/json_reader.h"
+#include "tests/core/test_util.h"
+
+namespace weathergs {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::run_command;
+using testing::TempDir;
+
+const std::string kBin = WEATHERGS_BINARY;
+
+// One example benchmark shared by the tests of this file (written once, read-only afterwards).
+class EvaluatorCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    root_ = new TempDir();
+    auto r = run_command(kBin + " --quiet example -o " + ex());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  static void TearDownTestSuite() { delete root_; }
+  static std::string ex() { return *root_ / "ex"; }
+  static std::string ds(const std::string& name = "park_rain") { return ex() + "/datasets/" + name; }
+  static std::string renders(const std::string& m, const std::string& name = "park_rain") {
+    return ex() + "/renders/" + m + "/" + name;
+  }
+  static TempDir* root_;
+};
+TempDir* EvaluatorCli::root_ = nullptr;
+
+TEST_F(EvaluatorCli, EvaluateWritesTheResultsFormat) {
+  TempDir out;
+  auto r = run_command(kBin + " --quiet evaluate --gt " + ds() + " --renders " + renders("box-blur") +
+                       " -o " + (out / "r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Json j = read_json_file(out / "r.json");
+  EXPECT_EQ(j["format"], "weathergs-results");
+  EXPECT_EQ(j["method"], "box-blur");  // from info.json
+  EXPECT_EQ(j["dataset"], "park_rain");
+  EXPECT_EQ(j["protocol"]["ssim"], "gaussian11_sigma1.5_valid");
+  EXPECT_EQ(j["protocol"]["lpips"], "alex_v0.1");
+  EXPECT_EQ(j["protocol"]["quantize_uint8"], true);
+  EXPECT_EQ(j["per_view"].size(), 2u);  // views 000 and 008 of 9
+  EXPECT_EQ(j["sha256"]["renders"].get<std::string>().size(), 64u);
+  EXPECT_GT(j["metrics"]["psnr"].get<double>(), 20);
+  EXPECT_EQ(j["method_info"]["method"], "box-blur");
+  // Same inputs -> byte-identical results, whatever the thread count.
+  auto r1 = run_command(kBin + " --quiet -j 1 evaluate --gt " + ds() + " --renders " + renders("box-blur") +
+                        " -o " + (out / "r1.json"));
+  ASSERT_EQ(r1.exit_code, 0) << r1.output;
+  EXPECT_EQ(read_file(out / "r.json"), read_file(out / "r1.json"));
+}
+
+TEST_F(EvaluatorCli, CompareJsonAndIdenticalImages) {
+  const std::string gt = ds() + "/clean/000.png";
+  auto r = run_command(kBin + " compare --json " + gt + " " + gt);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Json j = Json::parse(r.output);
+  EXPECT_TRUE(j["psnr"].is_null());
+  EXPECT_EQ(j["psnr_infinite"], true);
+  EXPECT_EQ(j["ssim"], 1.0);
+  EXPECT_EQ(j["lpips"], 0.0);
+  auto t = run_command(kBin + " compare " + gt + " " + gt);
+  EXPECT_NE(t.output.find("+inf"), std::string::npos) << t.output;
+}
+
+// Copies a render folder so a test can break it.
+std::string copy_renders(const std::string& from, const TempDir& dir) {
+  const std::string to = dir / "renders";
+  fs::copy(from, to, fs::copy_options::recursive);
+  return to;
+}
+
+void expect_bad_input(const std::string& command, const std::string& must_mention, const std::string& no_file) {
+  auto r = run_command(command);
+  EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.output;
+  EXPECT_NE(r.output.find(must_mention), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(no_file)) << "a failed run left " << no_file;
+}
+
+TEST_F(EvaluatorCli, BadRendersAreClearErrorsAndLeaveNoResults) {
+  TempDir dir;
+  const std::string out = dir / "results.json";
+  const std::string eval = kBin + " --quiet evaluate --gt " + ds() + " -o " + out + " --renders ";
+  {  // corrupt PNG
+    TempDir d;
+    std::string rd = copy_renders(renders("noise"), d);
+    write_file_atomic(rd + "/008.png", "garbage, not a png");
+    expect_bad_input(eval + rd, "008.png", out);
+  }
+  {  // truncated PNG
+    TempDir d;
+    std::string rd = copy_renders(renders("noise"), d);
+    std::string bytes = read_file(rd + "/000.png");
+    write_file_atomic(rd + "/000.png", bytes.substr(0, bytes.size() / 3));
+    expect_bad_input(eval + rd, "000.png", out);
+  }
+  {  // missing view
+    TempDir d;
+    std::string rd = copy_renders(renders("noise"), d);
+    fs::remove(rd + "/008.png");
+    expect_bad_input(eval + rd, "missing renders for test view(s): 008", out);
+  }
+  {  // extra view
+    TempDir d;
+    std::string rd = copy_renders(renders("noise"), d);
+    fs::copy_file(rd + "/000.png", rd + "/003.png");
+    expect_bad_input(eval + rd, "not in the test split: 003", out);
+  }
+  {  // size mismatch
+    TempDir d;
+    std::string rd = copy_renders(renders("noise"), d);
+    write_image(rd + "/000.png", Image(50, 40, 3, ColorSpace::kSRGB, 0.5f));
+    expect_bad_input(eval + rd, "view '000'", out);
+  }
+  {  // malformed info.json
+    TempDir d;
+    std::string rd = copy_renders(renders("noise"), d);
+    write_file_atomic(rd + "/info.json", "{\"method\": ");
+    expect_bad_input(eval + rd, "info.json", out);
+  }
+  // Missing file for compare; missing dataset; bad flag value; unknown subcommand.
+  expect_bad_input(kBin + " compare /nonexistent/a.png /nonexistent/b.png", "does not exist", out);
+  expect_bad_input(kBin + " evaluate --gt /nonexistent --renders x -o " + out, "/nonexistent", out);
+  expect_bad_input(kBin + " evaluate --gt " + ds() + " --renders " + renders("noise") + " -o " + out +
+                       " --ssim-padding reflect", "reflect", out);
+  expect_bad_input(kBin + " frobnicate", "frobnicate", out);
+  // An LPIPS model that cannot be found names the path and how to skip it.
+  expect_bad_input(eval + renders("noise") + " --lpips-model /nonexistent/model.onnx", "/nonexistent/model.onnx", out);
+  EXPECT_EQ(testing::count_entries(dir.path()), 0);
+}
+
+TEST_F(EvaluatorCli, NoLpipsIsRecorded) {
+  TempDir out;
+  auto r = run_command(kBin + " --quiet evaluate --no-lpips --ssim-padding same --gt " + ds() + " --renders " +
+                       renders("shift") + " -o " + (out / "r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Json j = read_json_file(out / "r.json");
+  EXPECT_TRUE(j["protocol"]["lpips"].is_null());
+  EXPECT_TRUE(j["metrics"]["lpips"].is_null());
+  EXPECT_EQ(j["protocol"]["ssim"], "gaussian11_sigma1.5_same");
+}
+
+TEST_F(EvaluatorCli, MaskedEvaluation) {
+  TempDir dir;
+  // A mask over the whole image except one row: metrics must still be finite and recorded.
+  fs::create_directories(dir / "masks");
+  for (const char* v : {"000", "008"}) {
+    Image m(120, 80, 1, ColorSpace::kLinear, 0.f);
+    for (int x = 0; x < 60; ++x)
+      for (int y = 0; y < 80; ++y) m.at(x, y) = 1.f;
+    write_mask(dir / (std::string("masks/") + v + ".png"), m);
+  }
+  auto r = run_command(kBin + " --quiet evaluate --gt " + ds() + " --renders " + renders("noise") + " --mask-dir " +
+                       (dir / "masks") + " -o " + (dir / "r.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Json j = read_json_file(dir / "r.json");
+  EXPECT_EQ(j["protocol"]["mask"], "masks");
+  // A missing mask is an error naming it.
+  fs::remove(dir / "masks/008.png");
+  auto bad = run_command(kBin + " --quiet evaluate --gt " + ds() + " --renders " + renders("noise") + " --mask-dir " +
+                         (dir / "masks") + " -o " + (dir / "r2.json"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.output.find("008.png"), std::string::npos) << bad.output;
+}
+
+TEST_F(EvaluatorCli, LeaderboardAndCheckRoundTrip) {
+  TempDir dir;
+  std::vector<std::string> files;
+  for (const char* m : {"box-blur", "noise", "shift"})
+    for (const char* d : {"park_rain", "yard_rain", "park_snow"}) {
+      std::string f = dir / (std::string(m) + "_" + d + ".json");
+      auto r = run_command(kBin + " --quiet evaluate --no-lpips --gt " + ds(d) + " --renders " + renders(m, d) + " -o " + f);
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+      files.push_back(f);
+    }
+  std::string all;
+  for (const auto& f : files) all += " " + f;
+  for (const char* fmt : {"md", "csv", "latex", "html"}) {
+    const std::string out = dir / (std::string("board.") + fmt);
+    auto r = run_command(kBin + " leaderboard" + all + " --format " + fmt + " -o " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::string text = read_file(out);
+    EXPECT_NE(text.find("yard"), std::string::npos) << fmt;
+    EXPECT_NE(text.find("noise"), std::string::npos) << fmt;
+  }
+  std::string md = read_file(dir / "board.md");
+  EXPECT_NE(md.find("## Weather: Rain"), std::string::npos) << md;
+  EXPECT_NE(md.find("## Weather: Snow"), std::string::npos) << md;
+  EXPECT_NE(md.find("**"), std::string::npos) << md;
+
+  // Check: results against themselves pass; a degraded copy fails with exit 1 and a readable report.
+  const std::string base = files[0];
+  auto same = run_command(kBin + " check --baseline " + base + " --results " + base);
+  EXPECT_EQ(same.exit_code, 0) << same.output;
+  EXPECT_NE(same.output.find("PASSED"), std::string::npos);
+  Json j = read_json_file(base);
+  j["metrics"]["psnr"] = j["metrics"]["psnr"].get<double>() - 0.5;
+  write_file_atomic(dir / "worse.json", j.dump(2));
+  auto worse = run_command(kBin + " check --baseline " + base + " --results " + (dir / "worse.json") + " --json " +
+                           (dir / "report.json"));
+  EXPECT_EQ(worse.exit_code, 1) << worse.output;
+  EXPECT_NE(worse.output.find("FAIL"), std::string::npos) << worse.output;
+  EXPECT_NE(worse.output.find("park_rain"), std::string::npos) << worse.output;
+  EXPECT_EQ(read_json_file(dir / "report.json")["passed"], false);
+  // A looser tolerance lets it pass.
+  EXPECT_EQ(run_command(kBin + " check --baseline " + base + " --results " + (dir / "worse.json") + " --psnr-tol 1").exit_code, 0);
+  // Malformed and unknown-key results are bad input (exit 2), and no table is written.
+  write_file_atomic(dir / "broken.json", "{");
+  expect_bad_input(kBin + " leaderboard " + (dir / "broken.json") + " -o " + (dir / "t.md"), "broken.json", dir / "t.md");
+  j = read_json_file(base);
+  j["extra_key"] = 1;
+  write_file_atomic(dir / "unknown.json", j.dump());
+  expect_bad_input(kBin + " leaderboard " + (dir / "unknown.json") + " -o " + (dir / "t.md"), "'extra_key'", dir / "t.md");
+  expect_bad_input(kBin + " check --baseline " + (dir / "unknown.json") + " --results " + base, "'extra_key'", dir / "t.md");
+}
+
+}  // namespace
+}  // namespace weathergs

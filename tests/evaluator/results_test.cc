@@ -1,0 +1,151 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/atomic_file.h"
+#include "evaluator/check.h"
+#include "evaluator/leaderboard.h"
+#include "evaluator/results.h"
+#include "tests/core/test_util.h"
+
+namespace weathergs::evaluator {
+namespace {
+
+Results make(const std::string& method, const std::string& scene, const std::string& weather, double psnr,
+             double ssim, std::optional<double> lpips) {
+  Results r;
+  r.method = method;
+  r.scene = scene;
+  r.weather = weather;
+  r.dataset = scene + "_" + weather;
+  r.metrics = {psnr, ssim, lpips};
+  r.per_view = {{"000", r.metrics}};
+  return r;
+}
+
+TEST(ResultsTest, JsonRoundTripWithInfinitePsnrAndSkippedLpips) {
+  testing::TempDir dir;
+  Results r = make("m", "pool", "rain", std::numeric_limits<double>::infinity(), 1.0, std::nullopt);
+  r.protocol.lpips.reset();
+  r.method_info = {{"iterations", 7000}};
+  write_results(dir / "r.json", r);
+  Json j = read_json_file(dir / "r.json");
+  EXPECT_TRUE(j["metrics"]["psnr"].is_null());
+  EXPECT_EQ(j["metrics"]["psnr_infinite"], true);
+  EXPECT_TRUE(j["metrics"]["lpips"].is_null());
+  EXPECT_TRUE(j["protocol"]["lpips"].is_null());
+  Results back = read_results(dir / "r.json");
+  EXPECT_TRUE(std::isinf(back.metrics.psnr));
+  EXPECT_FALSE(back.metrics.lpips);
+  EXPECT_EQ(back.method_info["iterations"], 7000);
+  EXPECT_EQ(back.protocol, r.protocol);
+}
+
+TEST(ResultsTest, StrictReading) {
+  testing::TempDir dir;
+  Json j = results_to_json(make("m", "pool", "rain", 20, 0.5, 0.2));
+  j["metrics"]["psnrr"] = 3;
+  write_file_atomic(dir / "bad.json", j.dump());
+  try {
+    read_results(dir / "bad.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json:/metrics"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'psnrr'"), std::string::npos) << e.what();
+  }
+  j = results_to_json(make("m", "pool", "rain", 20, 0.5, 0.2));
+  j["metrics"]["ssim"] = "high";
+  write_file_atomic(dir / "bad2.json", j.dump());
+  EXPECT_THROW(read_results(dir / "bad2.json"), InputError);
+  write_file_atomic(dir / "bad3.json", "{\"format\": \"weathergs-results\", ");
+  EXPECT_THROW(read_results(dir / "bad3.json"), InputError);
+}
+
+std::vector<LoadedResults> paper_like() {
+  return {{"a", make("3dgs", "tanabata", "snow", 20.0, 0.70, 0.30)},
+          {"b", make("3dgs", "pool", "snow", 22.0, 0.80, 0.20)},
+          {"c", make("weathergs", "tanabata", "snow", 25.0, 0.85, 0.15)},
+          {"d", make("weathergs", "pool", "snow", 21.0, 0.82, 0.18)},
+          {"e", make("nerf", "tanabata", "snow", 18.0, 0.60, 0.40)},
+          {"f", make("weathergs", "pool", "rain", 27.0, 0.90, 0.10)}};
+}
+
+TEST(LeaderboardTest, TablesPerWeatherBestAndAverage) {
+  auto tables = build_leaderboard(paper_like());
+  ASSERT_EQ(tables.size(), 2u);
+  const LeaderboardTable& snow = tables[0];
+  EXPECT_EQ(snow.weather, "snow");
+  EXPECT_EQ(snow.scenes, (std::vector<std::string>{"tanabata", "pool"}));
+  EXPECT_EQ(snow.methods, (std::vector<std::string>{"3dgs", "weathergs", "nerf"}));
+  EXPECT_DOUBLE_EQ(snow.average[1].psnr, 23.0);
+  EXPECT_EQ(snow.average[2].n, 0);  // nerf lacks pool: no average
+  std::string md = render_leaderboard(tables, TableFormat::kMarkdown);
+  EXPECT_NE(md.find("## Weather: Snow"), std::string::npos);
+  EXPECT_NE(md.find("**25.00**"), std::string::npos) << md;   // best tanabata PSNR
+  EXPECT_NE(md.find("**22.00**"), std::string::npos) << md;   // best pool PSNR is 3dgs
+  EXPECT_NE(md.find("**0.150**"), std::string::npos) << md;   // lowest LPIPS is bold
+  EXPECT_EQ(md.find("**0.400**"), std::string::npos) << md;
+  EXPECT_NE(md.find("| nerf | 18.00 | 0.600 | 0.400 | – |"), std::string::npos) << md;
+  std::string csv = render_leaderboard(tables, TableFormat::kCsv);
+  EXPECT_NE(csv.find("weather,method,tanabata_psnr,tanabata_ssim,tanabata_lpips"), std::string::npos) << csv;
+  std::string tex = render_leaderboard(tables, TableFormat::kLatex);
+  EXPECT_NE(tex.find("\\multicolumn{3}{c}{tanabata}"), std::string::npos);
+  EXPECT_NE(tex.find("\\textbf{25.00}"), std::string::npos);
+  std::string html = render_leaderboard(tables, TableFormat::kHtml);
+  EXPECT_NE(html.find("<b>25.00</b>"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);  // self-contained
+  EXPECT_EQ(html.find("<script src"), std::string::npos);
+}
+
+TEST(LeaderboardTest, RepeatedRunsShowSpreadAndProtocolsMustMatch) {
+  std::vector<LoadedResults> rs = {{"s1", make("3dgs", "pool", "rain", 20.0, 0.7, 0.3)},
+                                   {"s2", make("3dgs", "pool", "rain", 22.0, 0.7, 0.3)}};
+  auto tables = build_leaderboard(rs);
+  EXPECT_EQ(tables[0].cells[0][0].n, 2);
+  EXPECT_DOUBLE_EQ(tables[0].cells[0][0].psnr, 21.0);
+  EXPECT_DOUBLE_EQ(tables[0].cells[0][0].psnr_std, 1.0);
+  EXPECT_NE(render_leaderboard(tables, TableFormat::kMarkdown).find("21.00 ± 1.00"), std::string::npos);
+  rs[1].results.protocol.ssim = "gaussian11_sigma1.5_same";
+  EXPECT_THROW(build_leaderboard(rs), InputError);
+  EXPECT_THROW(parse_table_format("pdf"), InputError);
+}
+
+TEST(CheckTest, PassesWithinToleranceFailsBeyond) {
+  std::vector<LoadedResults> base = {{"base.json", make("wgs", "pool", "rain", 25.0, 0.85, 0.15)}};
+  CheckTolerances tol;
+  // Within tolerance (0.1 dB drop, small SSIM drop, small LPIPS rise) and an improvement.
+  std::vector<LoadedResults> ok = {{"new.json", make("wgs", "pool", "rain", 24.9, 0.847, 0.154)}};
+  EXPECT_TRUE(check_regression(base, ok, tol).passed);
+  std::vector<LoadedResults> better = {{"new.json", make("wgs", "pool", "rain", 26.0, 0.9, 0.1)}};
+  EXPECT_TRUE(check_regression(base, better, tol).passed);
+  // PSNR drop of 0.5 dB fails and the report says which metric.
+  std::vector<LoadedResults> worse = {{"new.json", make("wgs", "pool", "rain", 24.5, 0.85, 0.15)}};
+  CheckReport r = check_regression(base, worse, tol);
+  EXPECT_FALSE(r.passed);
+  EXPECT_NE(r.text.find("PSNR"), std::string::npos);
+  EXPECT_NE(r.text.find("FAIL"), std::string::npos);
+  EXPECT_EQ(r.json["passed"], false);
+  // LPIPS rising beyond tolerance fails too.
+  std::vector<LoadedResults> lp = {{"new.json", make("wgs", "pool", "rain", 25.0, 0.85, 0.16)}};
+  EXPECT_FALSE(check_regression(base, lp, tol).passed);
+  // A missing dataset fails; a protocol mismatch is not comparable (bad input).
+  std::vector<LoadedResults> other = {{"new.json", make("wgs", "tanabata", "rain", 25, 0.85, 0.15)}};
+  EXPECT_FALSE(check_regression(base, other, tol).passed);
+  worse[0].results.protocol.quantize_uint8 = false;
+  EXPECT_THROW(check_regression(base, worse, tol), InputError);
+  tol.psnr = -1;
+  EXPECT_THROW(check_regression(base, ok, tol), InputError);
+}
+
+TEST(CheckTest, InfinitePsnrComparesSanely) {
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<LoadedResults> base = {{"b", make("m", "s", "w", inf, 1.0, 0.0)}};
+  std::vector<LoadedResults> same = {{"n", make("m", "s", "w", inf, 1.0, 0.0)}};
+  EXPECT_TRUE(check_regression(base, same, {}).passed);
+  std::vector<LoadedResults> finite = {{"n", make("m", "s", "w", 60.0, 1.0, 0.0)}};
+  EXPECT_FALSE(check_regression(base, finite, {}).passed);
+}
+
+}  // namespace
+}  // namespace weathergs::evaluator
