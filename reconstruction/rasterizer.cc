@@ -1,0 +1,393 @@
+#include "reconstruction/rasterizer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "core/error.h"
+#include "core/parallel.h"
+
+namespace weathergs::recon {
+
+namespace {
+
+constexpr int64_t kGaussianChunk = 2048;  // per-Gaussian loops: work per parallel task
+constexpr int kEntryGrads = 9;
+constexpr int kTilePixels = kTileSize * kTileSize;
+
+template <typename T>
+bool all_finite(std::initializer_list<T> values) {
+  for (T v : values)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+// Integer tile index from a float coordinate, clamped before the conversion (huge or NaN inputs
+// would make the conversion undefined).
+template <typename T>
+int tile_floor_index(T v, int grid) {
+  const T c = std::clamp(v / T(kTileSize), T(0), T(grid));
+  return c == c ? int(c) : 0;
+}
+
+// Pixel range [lo, hi] whose centers can receive alpha >= 1/255 from a Gaussian: the bounding box
+// of the ellipse d^T conic d <= 2 ln(255 o), widened by one pixel against rounding. Outside it the
+// blend skips every pixel anyway, so restricting the loop does not change the result.
+template <typename T>
+void pixel_range(T mean, T cov_diag, T r2, int lo_clip, int hi_clip, int* lo, int* hi) {
+  const T h = std::sqrt(r2 * cov_diag) + T(1);
+  const T a = std::clamp(std::ceil(mean - h - T(0.5)), T(lo_clip), T(hi_clip + 1));
+  const T b = std::clamp(std::floor(mean + h - T(0.5)), T(lo_clip - 1), T(hi_clip));
+  *lo = int(a);
+  *hi = int(b);
+}
+
+template <typename T>
+void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const RasterSettings<T>& settings,
+                RasterState<T>* s) {
+  const int64_t n = int64_t(g.size());
+  parallel_for_chunks(0, n, kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
+    for (int64_t i = lo; i < hi; ++i) {
+      s->radius[i] = 0;
+      for (int k = 0; k < 4; ++k) s->rect[i * 4 + k] = 0;
+      const Vec3<T> p(g.position[i * 3], g.position[i * 3 + 1], g.position[i * 3 + 2]);
+      const T z = cam.rotation.row(2).dot(p) + cam.translation.z();
+      if (!(z > T(kNearPlane))) continue;  // also culls NaN
+      const Vec3<T> ls(g.log_scale[i * 3], g.log_scale[i * 3 + 1], g.log_scale[i * 3 + 2]);
+      const Vec4<T> q(g.rotation[i * 4], g.rotation[i * 4 + 1], g.rotation[i * 4 + 2], g.rotation[i * 4 + 3]);
+      const Mat3<T> sigma = covariance_3d(ls, q);
+      const Projection<T> pr = project_gaussian(p, sigma, cam);
+      const T a = pr.cov(0, 0), b = pr.cov(0, 1), c = pr.cov(1, 1);
+      const T det = a * c - b * b;
+      if (!(det > T(0))) continue;
+      const T mid = T(0.5) * (a + c);
+      const T root = std::sqrt(std::max(T(kMinEigenGap), mid * mid - det));
+      const T lambda = std::max(mid + root, mid - root);
+      const T radius = std::ceil(T(3) * std::sqrt(lambda));
+      const T conic_a = c / det, conic_b = -b / det, conic_c = a / det;
+      if (!all_finite<T>({pr.mean.x(), pr.mean.y(), a, b, c, radius, conic_a, conic_b, conic_c})) continue;
+      // Tile rectangle exactly as the reference's getRect, in its pixel-center-at-integer frame.
+      const T px = pr.mean.x() - T(0.5), py = pr.mean.y() - T(0.5);
+      const int x0 = tile_floor_index(px - radius, s->tiles_x);
+      const int y0 = tile_floor_index(py - radius, s->tiles_y);
+      const int x1 = tile_floor_index(px + radius + T(kTileSize - 1), s->tiles_x);
+      const int y1 = tile_floor_index(py + radius + T(kTileSize - 1), s->tiles_y);
+      if ((x1 - x0) * (y1 - y0) == 0) continue;
+      T len;
+      const Vec3<T> dir = view_direction(p, cam.center_world, &len);
+      bool clamped[3];
+      const Vec3<T> color = sh_to_color(settings.sh_degree, &g.sh[i * kShFloats], dir, clamped);
+      if (!all_finite<T>({color.x(), color.y(), color.z()})) continue;
+      s->radius[i] = int32_t(std::min<T>(radius, T(std::numeric_limits<int32_t>::max() / 2)));
+      s->rect[i * 4] = x0; s->rect[i * 4 + 1] = y0; s->rect[i * 4 + 2] = x1; s->rect[i * 4 + 3] = y1;
+      s->mean2d[i * 2] = pr.mean.x(); s->mean2d[i * 2 + 1] = pr.mean.y();
+      s->cov2d[i * 3] = a; s->cov2d[i * 3 + 1] = b; s->cov2d[i * 3 + 2] = c;
+      s->conic[i * 3] = conic_a; s->conic[i * 3 + 1] = conic_b; s->conic[i * 3 + 2] = conic_c;
+      s->opacity[i] = sigmoid(g.opacity_logit[i]);
+      for (int k = 0; k < 3; ++k) s->color[i * 3 + k] = color[k];
+      s->clamped[i] = uint8_t((clamped[0] ? 1 : 0) | (clamped[1] ? 2 : 0) | (clamped[2] ? 4 : 0));
+      s->depth[i] = z;
+    }
+  });
+}
+
+// Builds the per-tile depth-sorted lists and, per Gaussian, the entries of its tiles.
+template <typename T>
+void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
+  const int64_t n = int64_t(s->radius.size());
+  const int num_tiles = s->tiles_x * s->tiles_y;
+  s->entry_offset.assign(n + 1, 0);
+  for (int64_t i = 0; i < n; ++i) {
+    const int32_t* r = &s->rect[i * 4];
+    const int64_t area = s->radius[i] > 0 ? int64_t(r[2] - r[0]) * (r[3] - r[1]) : 0;
+    s->entry_offset[i + 1] = s->entry_offset[i] + area;
+  }
+  const int64_t entries = s->entry_offset[n];
+  s->tile_offset.assign(num_tiles + 1, 0);
+  for (int64_t i = 0; i < n; ++i) {
+    if (s->radius[i] == 0) continue;
+    const int32_t* r = &s->rect[i * 4];
+    for (int ty = r[1]; ty < r[3]; ++ty)
+      for (int tx = r[0]; tx < r[2]; ++tx) ++s->tile_offset[ty * s->tiles_x + tx + 1];
+  }
+  for (int t = 0; t < num_tiles; ++t) s->tile_offset[t + 1] += s->tile_offset[t];
+  keys->resize(entries);
+  std::vector<int64_t> cursor(s->tile_offset.begin(), s->tile_offset.end() - 1);
+  for (int64_t i = 0; i < n; ++i) {
+    if (s->radius[i] == 0) continue;
+    // Depth is > 0.2, so the float bit pattern orders like the value; ties go to the lower index.
+    const float d = float(s->depth[i]);
+    uint32_t bits;
+    std::memcpy(&bits, &d, 4);
+    const uint64_t key = (uint64_t(bits) << 32) | uint64_t(uint32_t(i));
+    const int32_t* r = &s->rect[i * 4];
+    for (int ty = r[1]; ty < r[3]; ++ty)
+      for (int tx = r[0]; tx < r[2]; ++tx) (*keys)[cursor[ty * s->tiles_x + tx]++] = key;
+  }
+  s->tile_gaussian.resize(entries);
+  s->entry_of.resize(entries);
+  parallel_for(0, num_tiles, [&](int64_t t) {
+    const int64_t b = s->tile_offset[t], e = s->tile_offset[t + 1];
+    std::sort(keys->begin() + b, keys->begin() + e);
+    const int tx = int(t % s->tiles_x), ty = int(t / s->tiles_x);
+    for (int64_t k = b; k < e; ++k) {
+      const int32_t gi = int32_t((*keys)[k] & 0xffffffffu);
+      s->tile_gaussian[k] = gi;
+      const int32_t* r = &s->rect[int64_t(gi) * 4];
+      const int64_t j = int64_t(ty - r[1]) * (r[2] - r[0]) + (tx - r[0]);
+      s->entry_of[s->entry_offset[gi] + j] = k;
+    }
+  });
+}
+
+template <typename T>
+void render_tiles(const RasterSettings<T>& settings, RasterState<T>* s) {
+  const int num_tiles = s->tiles_x * s->tiles_y;
+  const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax), t_min = T(kTransmittanceMin);
+  parallel_for(0, num_tiles, [&](int64_t t) {
+    const int x0 = int(t % s->tiles_x) * kTileSize, y0 = int(t / s->tiles_x) * kTileSize;
+    const int x1 = std::min(s->width, x0 + kTileSize), y1 = std::min(s->height, y0 + kTileSize);
+    const int tw = x1 - x0;
+    T trans[kTilePixels], rgb[kTilePixels * 3];
+    int32_t last[kTilePixels];
+    bool done[kTilePixels];
+    const int npix = tw * (y1 - y0);
+    for (int p = 0; p < npix; ++p) {
+      trans[p] = T(1);
+      rgb[p * 3] = rgb[p * 3 + 1] = rgb[p * 3 + 2] = T(0);
+      last[p] = 0;
+      done[p] = false;
+    }
+    int remaining = npix;
+    const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
+    for (int64_t k = begin; k < end && remaining > 0; ++k) {
+      const int32_t gi = s->tile_gaussian[k];
+      const T o = s->opacity[gi];
+      if (o < alpha_min) continue;  // alpha <= o can never reach 1/255
+      const T mx = s->mean2d[gi * 2], my = s->mean2d[gi * 2 + 1];
+      const T ca = s->conic[gi * 3], cb = s->conic[gi * 3 + 1], cc = s->conic[gi * 3 + 2];
+      const T r2 = T(2) * std::log(T(255) * o);
+      int px0, px1, py0, py1;
+      pixel_range(mx, s->cov2d[gi * 3], r2, x0, x1 - 1, &px0, &px1);
+      pixel_range(my, s->cov2d[gi * 3 + 2], r2, y0, y1 - 1, &py0, &py1);
+      const T* col = &s->color[gi * 3];
+      const int32_t contributor = int32_t(k - begin + 1);
+      for (int py = py0; py <= py1; ++py) {
+        const T dy = my - (T(py) + T(0.5));
+        for (int px = px0; px <= px1; ++px) {
+          const int p = (py - y0) * tw + (px - x0);
+          if (done[p]) continue;
+          const T dx = mx - (T(px) + T(0.5));
+          const T power = T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
+          if (power > T(0)) continue;
+          const T alpha = std::min(alpha_max, o * std::exp(power));
+          if (alpha < alpha_min) continue;
+          const T test_t = trans[p] * (T(1) - alpha);
+          if (test_t < t_min) {
+            done[p] = true;
+            --remaining;
+            continue;
+          }
+          const T w = alpha * trans[p];
+          rgb[p * 3] += col[0] * w;
+          rgb[p * 3 + 1] += col[1] * w;
+          rgb[p * 3 + 2] += col[2] * w;
+          trans[p] = test_t;
+          last[p] = contributor;
+        }
+      }
+    }
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const int p = (y - y0) * tw + (x - x0);
+        const int64_t pix = int64_t(y) * s->width + x;
+        for (int c = 0; c < 3; ++c) s->image[pix * 3 + c] = rgb[p * 3 + c] + trans[p] * settings.background[c];
+        s->final_transmittance[pix] = trans[p];
+        s->n_contrib[pix] = last[p];
+      }
+  });
+}
+
+}  // namespace
+
+template <typename T>
+void rasterize_forward(const GaussianSet<T>& g, const RasterCamera<T>& camera, const RasterSettings<T>& settings,
+                       RasterState<T>* s) {
+  WGS_CHECK(settings.sh_degree >= 0 && settings.sh_degree <= kMaxShDegree);
+  WGS_CHECK_EQ(g.sh.size(), g.size() * kShFloats);
+  WGS_CHECK_LT(g.size(), size_t(std::numeric_limits<int32_t>::max()));
+  WGS_CHECK(camera.width > 0 && camera.height > 0);
+  const size_t n = g.size();
+  s->width = camera.width;
+  s->height = camera.height;
+  s->tiles_x = (camera.width + kTileSize - 1) / kTileSize;
+  s->tiles_y = (camera.height + kTileSize - 1) / kTileSize;
+  s->mean2d.resize(n * 2);
+  s->cov2d.resize(n * 3);
+  s->conic.resize(n * 3);
+  s->opacity.resize(n);
+  s->color.resize(n * 3);
+  s->depth.resize(n);
+  s->radius.resize(n);
+  s->rect.resize(n * 4);
+  s->clamped.resize(n);
+  const size_t pixels = size_t(camera.width) * camera.height;
+  s->image.resize(pixels * 3);
+  s->final_transmittance.resize(pixels);
+  s->n_contrib.resize(pixels);
+  preprocess(g, camera, settings, s);
+  static thread_local std::vector<uint64_t> keys;
+  bin_and_sort(s, &keys);
+  render_tiles(settings, s);
+}
+
+template <typename T>
+void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, const RasterSettings<T>& settings,
+                        RasterState<T>* s, const std::vector<T>& v_image, GaussianSet<T>* grad,
+                        std::vector<T>* v_mean2d_ndc) {
+  const int64_t n = int64_t(g.size());
+  WGS_CHECK_EQ(size_t(n), s->radius.size());
+  WGS_CHECK_EQ(v_image.size(), s->image.size());
+  const int num_tiles = s->tiles_x * s->tiles_y;
+  s->entry_grad.resize(size_t(s->num_entries()) * kEntryGrads);
+  const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax);
+  const std::array<T, 3> bg = settings.background;
+
+  // 1. Per tile: replay each pixel's blend back to front, one gradient slot per entry.
+  parallel_for(0, num_tiles, [&](int64_t t) {
+    const int x0 = int(t % s->tiles_x) * kTileSize, y0 = int(t / s->tiles_x) * kTileSize;
+    const int x1 = std::min(s->width, x0 + kTileSize), y1 = std::min(s->height, y0 + kTileSize);
+    const int tw = x1 - x0;
+    const int npix = tw * (y1 - y0);
+    T trans[kTilePixels], t_final[kTilePixels], acc[kTilePixels * 3], last_col[kTilePixels * 3];
+    T last_alpha[kTilePixels], dpix[kTilePixels * 3], bg_dot[kTilePixels];
+    int32_t last[kTilePixels];
+    int32_t kmax = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const int p = (y - y0) * tw + (x - x0);
+        const int64_t pix = int64_t(y) * s->width + x;
+        trans[p] = t_final[p] = s->final_transmittance[pix];
+        last[p] = s->n_contrib[pix];
+        kmax = std::max(kmax, last[p]);
+        last_alpha[p] = T(0);
+        bg_dot[p] = T(0);
+        for (int c = 0; c < 3; ++c) {
+          acc[p * 3 + c] = last_col[p * 3 + c] = T(0);
+          dpix[p * 3 + c] = v_image[pix * 3 + c];
+          bg_dot[p] += bg[c] * dpix[p * 3 + c];
+        }
+      }
+    (void)npix;
+    const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
+    std::fill(s->entry_grad.begin() + begin * kEntryGrads, s->entry_grad.begin() + end * kEntryGrads, T(0));
+    for (int32_t k = kmax - 1; k >= 0; --k) {
+      const int32_t gi = s->tile_gaussian[begin + k];
+      const T o = s->opacity[gi];
+      if (o < alpha_min) continue;
+      const T mx = s->mean2d[gi * 2], my = s->mean2d[gi * 2 + 1];
+      const T ca = s->conic[gi * 3], cb = s->conic[gi * 3 + 1], cc = s->conic[gi * 3 + 2];
+      const T r2 = T(2) * std::log(T(255) * o);
+      int px0, px1, py0, py1;
+      pixel_range(mx, s->cov2d[gi * 3], r2, x0, x1 - 1, &px0, &px1);
+      pixel_range(my, s->cov2d[gi * 3 + 2], r2, y0, y1 - 1, &py0, &py1);
+      const T col[3] = {s->color[gi * 3], s->color[gi * 3 + 1], s->color[gi * 3 + 2]};
+      T g_mx = 0, g_my = 0, g_a = 0, g_b = 0, g_c = 0, g_o = 0, g_col[3] = {0, 0, 0};
+      for (int py = py0; py <= py1; ++py) {
+        const T dy = my - (T(py) + T(0.5));
+        for (int px = px0; px <= px1; ++px) {
+          const int p = (py - y0) * tw + (px - x0);
+          if (k >= last[p]) continue;
+          const T dx = mx - (T(px) + T(0.5));
+          const T power = T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
+          if (power > T(0)) continue;
+          const T gauss = std::exp(power);
+          const T alpha_raw = o * gauss;
+          const T alpha = std::min(alpha_max, alpha_raw);
+          if (alpha < alpha_min) continue;
+          trans[p] = trans[p] / (T(1) - alpha);
+          const T tp = trans[p];
+          const T w = alpha * tp;
+          T v_alpha = 0;
+          for (int c = 0; c < 3; ++c) {
+            T& a = acc[p * 3 + c];
+            a = last_alpha[p] * last_col[p * 3 + c] + (T(1) - last_alpha[p]) * a;
+            last_col[p * 3 + c] = col[c];
+            v_alpha += (col[c] - a) * dpix[p * 3 + c];
+            g_col[c] += w * dpix[p * 3 + c];
+          }
+          v_alpha *= tp;
+          last_alpha[p] = alpha;
+          v_alpha += -t_final[p] / (T(1) - alpha) * bg_dot[p];
+          if (alpha_raw > alpha_max) continue;  // clamped alpha: flat in opacity and position
+          const T v_power = o * v_alpha * gauss;
+          g_mx += v_power * -(ca * dx + cb * dy);
+          g_my += v_power * -(cc * dy + cb * dx);
+          g_a += v_power * T(-0.5) * dx * dx;
+          g_b += v_power * -dx * dy;
+          g_c += v_power * T(-0.5) * dy * dy;
+          g_o += gauss * v_alpha;
+        }
+      }
+      T* eg = &s->entry_grad[(begin + k) * kEntryGrads];
+      eg[0] = g_mx; eg[1] = g_my; eg[2] = g_a; eg[3] = g_b; eg[4] = g_c; eg[5] = g_o;
+      eg[6] = g_col[0]; eg[7] = g_col[1]; eg[8] = g_col[2];
+    }
+  });
+
+  // 2. Per Gaussian: sum its entries in tile order, then pull back to the parameters.
+  grad->assign_zero(size_t(n));
+  if (v_mean2d_ndc) v_mean2d_ndc->assign(size_t(n) * 2, T(0));
+  const T ndc_x = T(0.5) * T(s->width), ndc_y = T(0.5) * T(s->height);
+  parallel_for_chunks(0, n, kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
+    for (int64_t i = lo; i < hi; ++i) {
+      if (s->radius[i] == 0) continue;
+      T eg[kEntryGrads] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+      for (int64_t j = s->entry_offset[i]; j < s->entry_offset[i + 1]; ++j) {
+        const T* e = &s->entry_grad[s->entry_of[j] * kEntryGrads];
+        for (int k = 0; k < kEntryGrads; ++k) eg[k] += e[k];
+      }
+      if (v_mean2d_ndc) {
+        (*v_mean2d_ndc)[i * 2] = eg[0] * ndc_x;
+        (*v_mean2d_ndc)[i * 2 + 1] = eg[1] * ndc_y;
+      }
+      const T o = s->opacity[i];
+      grad->opacity_logit[i] = eg[5] * o * (T(1) - o);
+      const Vec3<T> p(g.position[i * 3], g.position[i * 3 + 1], g.position[i * 3 + 2]);
+      const Vec3<T> ls(g.log_scale[i * 3], g.log_scale[i * 3 + 1], g.log_scale[i * 3 + 2]);
+      const Vec4<T> q(g.rotation[i * 4], g.rotation[i * 4 + 1], g.rotation[i * 4 + 2], g.rotation[i * 4 + 3]);
+      Mat2<T> cov;
+      cov << s->cov2d[i * 3], s->cov2d[i * 3 + 1], s->cov2d[i * 3 + 1], s->cov2d[i * 3 + 2];
+      const Mat2<T> v_cov = inverse_2x2_vjp(cov, Vec3<T>(eg[2], eg[3], eg[4]));
+      const Mat3<T> sigma = covariance_3d(ls, q);
+      Vec3<T> v_p = Vec3<T>::Zero();
+      Mat3<T> v_sigma = Mat3<T>::Zero();
+      project_gaussian_vjp(p, sigma, cam, Vec2<T>(eg[0], eg[1]), v_cov, &v_p, &v_sigma);
+      Vec3<T> v_ls = Vec3<T>::Zero();
+      Vec4<T> v_q = Vec4<T>::Zero();
+      covariance_3d_vjp(ls, q, v_sigma, &v_ls, &v_q);
+      const bool clamped[3] = {(s->clamped[i] & 1) != 0, (s->clamped[i] & 2) != 0, (s->clamped[i] & 4) != 0};
+      sh_to_color_vjp(settings.sh_degree, &g.sh[i * kShFloats], p, cam.center_world, Vec3<T>(eg[6], eg[7], eg[8]),
+                      clamped, &grad->sh[i * kShFloats], &v_p);
+      for (int k = 0; k < 3; ++k) {
+        grad->position[i * 3 + k] = v_p[k];
+        grad->log_scale[i * 3 + k] = v_ls[k];
+      }
+      for (int k = 0; k < 4; ++k) grad->rotation[i * 4 + k] = v_q[k];
+    }
+  });
+}
+
+template void rasterize_forward<float>(const GaussianSet<float>&, const RasterCamera<float>&,
+                                       const RasterSettings<float>&, RasterState<float>*);
+template void rasterize_forward<double>(const GaussianSet<double>&, const RasterCamera<double>&,
+                                        const RasterSettings<double>&, RasterState<double>*);
+template void rasterize_backward<float>(const GaussianSet<float>&, const RasterCamera<float>&,
+                                        const RasterSettings<float>&, RasterState<float>*,
+                                        const std::vector<float>&, GaussianSet<float>*, std::vector<float>*);
+template void rasterize_backward<double>(const GaussianSet<double>&, const RasterCamera<double>&,
+                                         const RasterSettings<double>&, RasterState<double>*,
+                                         const std::vector<double>&, GaussianSet<double>*, std::vector<double>*);
+
+}  // namespace weathergs::recon

@@ -1,0 +1,71 @@
+// Tile-based Gaussian rasterizer on the CPU: the forward and backward passes of the reference
+// diff-gaussian-rasterization, with the same constants (gaussian_math.h).
+//
+// Forward: per Gaussian (parallel) projection, 2D covariance and SH colour; binning into 16x16 tiles
+// with the reference's 3-sigma radius; per-tile lists sorted by depth (ties by index); per tile
+// (parallel) front-to-back blending. Backward: per tile (parallel) back-to-front replay of each
+// pixel's blend, one gradient slot per (tile, Gaussian) entry; then per Gaussian (parallel) the slots
+// are summed in tile order and pulled back to the parameters. No float atomics, no per-thread
+// buffers: results are bitwise independent of the thread count.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "reconstruction/gaussian_math.h"
+#include "reconstruction/gaussians.h"
+
+namespace weathergs::recon {
+
+template <typename T>
+struct RasterSettings {
+  int sh_degree = kMaxShDegree;  // active SH degree, 0..3
+  std::array<T, 3> background = {T(0), T(0), T(0)};
+};
+
+// Everything the forward pass produces and the backward pass consumes. Reused between iterations
+// (vectors keep their capacity).
+template <typename T>
+struct RasterState {
+  int width = 0, height = 0, tiles_x = 0, tiles_y = 0;
+  // Per Gaussian.
+  std::vector<T> mean2d;         // N x 2, pixels
+  std::vector<T> cov2d;          // N x 3 (a, b, c) of [[a, b], [b, c]], px^2, low-pass included
+  std::vector<T> conic;          // N x 3, inverse of cov2d
+  std::vector<T> opacity;        // N, sigmoid(logit)
+  std::vector<T> color;          // N x 3
+  std::vector<T> depth;          // N, camera z
+  std::vector<int32_t> radius;   // N, reference radius in px; 0 = not rendered
+  std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive)
+  std::vector<uint8_t> clamped;  // N, bit c set when colour channel c was clamped at 0
+  std::vector<int64_t> entry_offset;  // N + 1: first entry of each Gaussian in entry_of
+  // Per tile.
+  std::vector<int64_t> tile_offset;   // tiles + 1
+  std::vector<int32_t> tile_gaussian; // entries: Gaussian ids, each tile's range sorted by depth
+  std::vector<int64_t> entry_of;      // entries: per Gaussian, its tiles' entry indices, tile order
+  // Per pixel.
+  std::vector<T> image;          // H x W x 3
+  std::vector<T> final_transmittance;  // H x W
+  std::vector<int32_t> n_contrib;      // H x W: entries [0, n) of the tile list were visited
+  // Scratch of the backward pass: 9 gradients per entry (mean x/y, conic a/b/c, opacity, rgb).
+  std::vector<T> entry_grad;
+
+  int64_t num_entries() const { return tile_offset.empty() ? 0 : tile_offset.back(); }
+};
+
+// Renders `g` into state->image. The model's SH array must hold degree 3 (48 floats per Gaussian);
+// only the first (sh_degree + 1)^2 coefficients are used.
+template <typename T>
+void rasterize_forward(const GaussianSet<T>& g, const RasterCamera<T>& camera, const RasterSettings<T>& settings,
+                       RasterState<T>* state);
+
+// Gradients of a scalar loss given dL/dimage (H x W x 3). Overwrites *grad (resized to g's size).
+// If v_mean2d_ndc is given, it receives dL/d(mean in NDC) per Gaussian (N x 2), the view-space
+// positional gradient that the reference's densification measures (pixels = (ndc + 1) * W / 2).
+template <typename T>
+void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& camera, const RasterSettings<T>& settings,
+                        RasterState<T>* state, const std::vector<T>& v_image, GaussianSet<T>* grad,
+                        std::vector<T>* v_mean2d_ndc = nullptr);
+
+}  // namespace weathergs::recon

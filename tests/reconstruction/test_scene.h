@@ -1,0 +1,97 @@
+// Shared helpers of the reconstruction tests: random Gaussian scenes, cameras looking at the origin,
+// and a synthetic dataset written with core's writers from our own forward pass.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/dataset.h"
+#include "core/image.h"
+#include "core/rng.h"
+#include "reconstruction/gaussians.h"
+#include "reconstruction/rasterizer.h"
+
+namespace weathergs::recon::testing {
+
+// A camera at `eye` looking at `target` with world +z up (OpenCV axes: x right, y down, z forward).
+inline Camera look_at_camera(const std::string& name, int width, int height, double focal,
+                             const Eigen::Vector3d& eye, const Eigen::Vector3d& target = Eigen::Vector3d::Zero()) {
+  Camera c;
+  c.name = name;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = focal;
+  c.cx = width / 2.0;
+  c.cy = height / 2.0;
+  const Eigen::Vector3d fwd = (target - eye).normalized();
+  Eigen::Vector3d up(0, 0, 1);
+  if (std::abs(fwd.dot(up)) > 0.99) up = Eigen::Vector3d(0, 1, 0);
+  const Eigen::Vector3d right = fwd.cross(up).normalized();
+  const Eigen::Vector3d down = fwd.cross(right);
+  Eigen::Matrix3d r;
+  r.row(0) = right.transpose();
+  r.row(1) = down.transpose();
+  r.row(2) = fwd.transpose();
+  c.camera_from_world.setIdentity();
+  c.camera_from_world.topLeftCorner<3, 3>() = r;
+  c.camera_from_world.topRightCorner<3, 1>() = -r * eye;
+  return c;
+}
+
+// n Gaussians in a ball of `radius` around the origin, random anisotropic scales around `scale`,
+// random rotations, opacities in (0.3, 0.9) and random colours with some view dependence.
+template <typename T>
+GaussianSet<T> random_gaussians(int n, uint64_t seed, double radius = 1.0, double scale = 0.08,
+                                double sh_rest = 0.1) {
+  GaussianSet<T> g;
+  g.assign_zero(n);
+  for (int i = 0; i < n; ++i) {
+    Rng rng(seed, 1, i);
+    Eigen::Vector3d p;
+    do {
+      p = Eigen::Vector3d(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1));
+    } while (p.norm() > 1);
+    for (int k = 0; k < 3; ++k) {
+      g.position[i * 3 + k] = T(p[k] * radius);
+      g.log_scale[i * 3 + k] = T(std::log(scale) + rng.uniform(-0.5f, 0.5f));
+    }
+    for (int k = 0; k < 4; ++k) g.rotation[i * 4 + k] = T(rng.normal());
+    g.opacity_logit[i] = T(inverse_sigmoid(rng.uniform(0.3f, 0.9f)));
+    for (int c = 0; c < 3; ++c) g.sh[i * kShFloats + c] = T(rgb_to_sh0(rng.uniform(0.1f, 0.9f)));
+    for (int k = 3; k < kShFloats; ++k) g.sh[i * kShFloats + k] = T(sh_rest * rng.normal());
+  }
+  return g;
+}
+
+// Cameras on a ring of `distance` around the origin, slightly above it.
+inline std::vector<Camera> ring_cameras(int count, int width, int height, double focal, double distance) {
+  std::vector<Camera> cams;
+  for (int i = 0; i < count; ++i) {
+    const double a = 2 * M_PI * i / count;
+    char name[16];
+    std::snprintf(name, sizeof name, "%03d", i);
+    cams.push_back(look_at_camera(name, width, height, focal,
+                                  Eigen::Vector3d(distance * std::cos(a), distance * std::sin(a), 0.3 * distance)));
+  }
+  return cams;
+}
+
+// Float image of a render (H x W x 3 in [0, 1], sRGB as the trainer treats images).
+inline Image to_image(const std::vector<float>& rgb, int width, int height) {
+  Image img(width, height, 3);
+  for (size_t i = 0; i < rgb.size(); ++i) img.data[i] = std::clamp(rgb[i], 0.f, 1.f);
+  return img;
+}
+
+inline Image render_image(const GaussianSet<float>& g, const Camera& cam, int sh_degree = 3) {
+  RasterState<float> st;
+  RasterSettings<float> rs;
+  rs.sh_degree = sh_degree;
+  rasterize_forward(g, RasterCamera<float>::from(cam), rs, &st);
+  return to_image(st.image, cam.width, cam.height);
+}
+
+}  // namespace weathergs::recon::testing
