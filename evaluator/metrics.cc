@@ -74,8 +74,8 @@ struct ChannelSsim {
 };
 
 ChannelSsim ssim_channel(const Image& a, const Image& b, int c, const SsimOptions& o, const Image* mask) {
-  const int w = a.width, h = a.height, r = o.radius;
-  std::vector<double> g(size_t(2 * r + 1));
+  const int w = a.width, h = a.height, r = o.radius, taps = 2 * r + 1;
+  std::vector<double> g(static_cast<size_t>(taps));
   double gs = 0;
   for (int i = -r; i <= r; ++i) gs += g[size_t(i + r)] = std::exp(-0.5 * i * i / (o.sigma * o.sigma));
   for (double& v : g) v /= gs;
@@ -85,52 +85,66 @@ ChannelSsim ssim_channel(const Image& a, const Image& b, int c, const SsimOption
   // Output window centres: valid -> [r, w - r) x [r, h - r); same -> the whole image.
   const int x0 = valid ? r : 0, x1 = valid ? w - r : w;
   const int y0 = valid ? r : 0, y1 = valid ? h - r : h;
-  const int ow = x1 - x0;
+  const int ow = x1 - x0, oh = y1 - y0;
+  // Input row i of the padded row buffer is image column i - pad (zeros outside: "same" padding).
+  const int pad = valid ? 0 : r;
+  const size_t plane = size_t(h) * size_t(ow);
 
-  // Horizontal pass for every input row: five filtered planes (x, y, xx, yy, xy), ow wide.
-  std::vector<double> hp(size_t(h) * size_t(ow) * 5);
+  // Horizontal pass: five planes (x, y, xx, yy, xy), structure of arrays, so that both passes are
+  // contiguous multiply-adds the compiler vectorizes.
+  std::vector<double> hp(plane * 5);
   parallel_for(0, h, [&](int64_t yy) {
     const int y = int(yy);
-    double* out = &hp[size_t(y) * size_t(ow) * 5];
-    for (int ox = 0; ox < ow; ++ox) {
-      const int cx = x0 + ox;
-      double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
-      for (int k = -r; k <= r; ++k) {
-        const int x = cx + k;
-        if (x < 0 || x >= w) continue;  // zero padding (only reachable in "same")
-        const double va = a.at(x, y, c), vb = b.at(x, y, c), wk = g[size_t(k + r)];
-        sx += wk * va; sy += wk * vb; sxx += wk * va * va; syy += wk * vb * vb; sxy += wk * va * vb;
+    const size_t n = size_t(w + 2 * pad);
+    std::vector<double> in(n * 5, 0.0);
+    double *ix = in.data(), *iy = ix + n, *ixx = iy + n, *iyy = ixx + n, *ixy = iyy + n;
+    for (int x = 0; x < w; ++x) {
+      const double va = a.at(x, y, c), vb = b.at(x, y, c);
+      const size_t i = size_t(x + pad);
+      ix[i] = va; iy[i] = vb; ixx[i] = va * va; iyy[i] = vb * vb; ixy[i] = va * vb;
+    }
+    for (int q = 0; q < 5; ++q) {
+      const double* src = in.data() + size_t(q) * n;
+      double* dst = &hp[size_t(q) * plane + size_t(y) * size_t(ow)];
+      // Output column ox is centred on padded index ox + r (valid: image column x0 + ox = ox + r).
+      for (int ox = 0; ox < ow; ++ox) dst[ox] = 0;
+      for (int k = 0; k < taps; ++k) {
+        const double wk = g[size_t(k)];
+        const double* s = src + k;
+        for (int ox = 0; ox < ow; ++ox) dst[ox] += wk * s[ox];
       }
-      double* o5 = out + size_t(ox) * 5;
-      o5[0] = sx; o5[1] = sy; o5[2] = sxx; o5[3] = syy; o5[4] = sxy;
     }
   }, 4);
 
   // Vertical pass and the SSIM formula, one partial sum per output row (reduced in row order).
-  const int oh = y1 - y0;
   std::vector<double> row_sum(size_t(oh), 0.0);
   std::vector<int64_t> row_count(size_t(oh), 0);
-  parallel_for(0, oh, [&](int64_t oy) {
-    const int cy = y0 + int(oy);
+  parallel_for(0, oh, [&](int64_t oyy) {
+    const int cy = y0 + int(oyy);
+    std::vector<double> m(size_t(ow) * 5, 0.0);
+    for (int q = 0; q < 5; ++q) {
+      double* acc = &m[size_t(q) * size_t(ow)];
+      for (int k = -r; k <= r; ++k) {
+        const int y = cy + k;
+        if (y < 0 || y >= h) continue;  // zero padding (only reachable in "same")
+        const double wk = g[size_t(k + r)];
+        const double* src = &hp[size_t(q) * plane + size_t(y) * size_t(ow)];
+        for (int ox = 0; ox < ow; ++ox) acc[ox] += wk * src[ox];
+      }
+    }
+    const double *mx = m.data(), *my = mx + ow, *mxx = my + ow, *myy = mxx + ow, *mxy = myy + ow;
     double s = 0;
     int64_t n = 0;
     for (int ox = 0; ox < ow; ++ox) {
       if (mask && mask->at(x0 + ox, cy) >= 0.5f) continue;
-      double m[5] = {0, 0, 0, 0, 0};
-      for (int k = -r; k <= r; ++k) {
-        const int y = cy + k;
-        if (y < 0 || y >= h) continue;
-        const double* p = &hp[(size_t(y) * size_t(ow) + size_t(ox)) * 5];
-        const double wk = g[size_t(k + r)];
-        for (int q = 0; q < 5; ++q) m[q] += wk * p[q];
-      }
-      const double mx = m[0], my = m[1];
-      const double vx = m[2] - mx * mx, vy = m[3] - my * my, cxy = m[4] - mx * my;
-      s += ((2 * mx * my + c1) * (2 * cxy + c2)) / ((mx * mx + my * my + c1) * (vx + vy + c2));
+      const double vx = mxx[ox] - mx[ox] * mx[ox], vy = myy[ox] - my[ox] * my[ox];
+      const double cxy = mxy[ox] - mx[ox] * my[ox];
+      s += ((2 * mx[ox] * my[ox] + c1) * (2 * cxy + c2)) /
+           ((mx[ox] * mx[ox] + my[ox] * my[ox] + c1) * (vx + vy + c2));
       ++n;
     }
-    row_sum[size_t(oy)] = s;
-    row_count[size_t(oy)] = n;
+    row_sum[size_t(oyy)] = s;
+    row_count[size_t(oyy)] = n;
   }, 4);
   ChannelSsim out;
   for (int i = 0; i < oh; ++i) { out.sum += row_sum[size_t(i)]; out.count += row_count[size_t(i)]; }

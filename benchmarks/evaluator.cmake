@@ -1,0 +1,2 @@
+add_executable(bench_evaluator ${CMAKE_CURRENT_LIST_DIR}/evaluator_metrics_bench.cc)
+target_link_libraries(bench_evaluator PRIVATE weathergs_evaluator benchmark::benchmark)
