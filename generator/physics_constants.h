@@ -1,0 +1,61 @@
+// The one table of physical constants of the weather generator. Every entry names its source and
+// unit; tests/generator/physics_test.cc checks each against numbers published with (or derived
+// from) that source. Units: D in mm, R in mm/h, N(D) in m^-3 mm^-1, speeds in m/s unless a name says
+// otherwise.
+#pragma once
+
+namespace weathergs::physics {
+
+// Marshall & Palmer (1948), J. Meteor. 5:165, "The distribution of raindrops with size":
+// N(D) = N0 exp(-Lambda D), N0 = 0.08 cm^-4, Lambda = 41 R^-0.21 cm^-1.
+constexpr double kMarshallPalmerN0_m3_mm = 8000.0;       // 0.08 cm^-4 = 8000 m^-3 mm^-1
+constexpr double kMarshallPalmerLambdaCoef_per_mm = 4.1;  // 41 cm^-1 = 4.1 mm^-1
+constexpr double kMarshallPalmerLambdaExp = -0.21;        // exponent of R (mm/h)
+
+// Atlas, Srivastava & Sekhon (1973), Rev. Geophys. Space Phys. 11:1, fit to Gunn & Kinzer (1949):
+// v(D) = 9.65 - 10.3 exp(-0.6 D), D in mm, v in m/s (negative below D = 0.109 mm: clamped at 0).
+constexpr double kAtlasA_m_s = 9.65;
+constexpr double kAtlasB_m_s = 10.3;
+constexpr double kAtlasC_per_mm = 0.6;
+
+// Gunn & Marshall (1958), J. Meteor. 15:452, snow by melted diameter D, R water equivalent (mm/h):
+// N0 = 3.8e3 R^-0.87 m^-3 mm^-1, Lambda = 25.5 R^-0.48 cm^-1 = 2.55 R^-0.48 mm^-1 (the paper gives
+// cm^-1; implementations that keep 25.5 with D in mm make flakes ten times too small).
+constexpr double kGunnMarshallN0Coef_m3_mm = 3800.0;
+constexpr double kGunnMarshallN0Exp = -0.87;
+constexpr double kGunnMarshallLambdaCoef_per_mm = 2.55;
+constexpr double kGunnMarshallLambdaExp = -0.48;
+
+// Locatelli & Hobbs (1974), J. Geophys. Res. 79:2185, aggregates of unrimed radiating assemblages
+// of dendrites: v = 0.8 D^0.16, D = maximum dimension in mm, v in m/s.
+constexpr double kLocatelliHobbsCoef_m_s = 0.8;
+constexpr double kLocatelliHobbsExp = 0.16;
+
+// Holroyd (1971) snowflake density law, as used in radar snow studies: rho = 0.170 / D g cm^-3 with
+// D the flake diameter in cm. Capped at the density of ice (flakes below ~1.85 mm).
+constexpr double kHolroydCoef_g_cm2 = 0.170;
+constexpr double kIceDensity_g_cm3 = 0.917;   // ice Ih at 0 C (CRC Handbook of Chemistry and Physics)
+constexpr double kWaterDensity_g_cm3 = 1.0;
+
+// Beard & Chuang (1987), J. Atmos. Sci. 44:1509: equilibrium raindrop axis ratio b/a, polynomial
+// fit in D (cm): b/a = 1.0048 + 0.0057 D - 2.628 D^2 + 3.682 D^3 - 1.677 D^4 (1 <= D <= 9 mm).
+constexpr double kBeardChuang_cm[5] = {1.0048, 0.0057, -2.628, 3.682, -1.677};
+
+// Koschmieder (1924): visibility V at which a black object's contrast falls to 2%:
+// V = -ln(0.02) / beta = 3.912 / beta.
+constexpr double kKoschmiederContrast = 0.02;
+constexpr double kKoschmiederConstant = 3.912;
+
+// Optical extinction by rain, beta = 0.312 R^0.67 km^-1 (issue 3's model). Cross-checked in the tests
+// against geometric optics (extinction efficiency 2) integrated over Marshall-Palmer.
+constexpr double kRainExtinctionCoef_per_km = 0.312;
+constexpr double kRainExtinctionExp = 0.67;
+
+// Standard gravity (3rd CGPM, 1901), m/s^2.
+constexpr double kGravity_m_s2 = 9.80665;
+
+// Rain rate from a drop-size distribution: R = 6e-4 pi Int N(D) D^3 v(D) dD  [mm/h]
+// = 3.6e6 (mm/h per m/s) * 1e-9 (m^3 per mm^3) * pi/6 (sphere volume / D^3).
+constexpr double kRainRateFactor = 6e-4 * 3.14159265358979323846;
+
+}  // namespace weathergs::physics

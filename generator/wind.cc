@@ -1,0 +1,91 @@
+#include "generator/wind.h"
+
+#include <cmath>
+
+#include "core/error.h"
+#include "core/rng.h"
+
+namespace weathergs {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+Eigen::Vector3d uniform_unit_vector(Rng& rng) {
+  const double z = 2.0 * rng.uniform_double() - 1.0;
+  const double phi = 2.0 * kPi * rng.uniform_double();
+  const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+// sin(x)/x, stable at 0.
+double sinc(double x) { return std::abs(x) < 1e-8 ? 1.0 - x * x / 6.0 : std::sin(x) / x; }
+}  // namespace
+
+void WindOptions::validate(const std::string& where) const {
+  if (!mean_m_s.allFinite()) throw InputError(where, "wind_m_s must be finite");
+  if (!(std::isfinite(turbulence_rms_m_s) && turbulence_rms_m_s >= 0))
+    throw InputError(where, "turbulence rms_m_s must be >= 0, got " + std::to_string(turbulence_rms_m_s));
+  if (!(std::isfinite(length_scale_m) && length_scale_m > 0))
+    throw InputError(where, "turbulence length_scale_m must be > 0, got " + std::to_string(length_scale_m));
+  if (modes < 1 || modes > 1024)
+    throw InputError(where, "turbulence modes must be in [1, 1024], got " + std::to_string(modes));
+}
+
+WindField::WindField(const WindOptions& options, uint64_t seed, uint64_t stream) : options_(options) {
+  if (options.turbulence_rms_m_s <= 0) return;
+  const int m = options.modes;
+  const double k_min = 2 * kPi / (2.0 * options.length_scale_m);
+  const double k_max = 2 * kPi / (options.length_scale_m / 8.0);
+  double sum_a2 = 0;
+  for (int i = 0; i < m; ++i) {
+    Rng rng(seed, stream, uint64_t(i));
+    const double f = m == 1 ? 0.5 : double(i) / (m - 1);
+    const double kmag = k_min * std::pow(k_max / k_min, f);
+    Mode mode;
+    mode.k = kmag * uniform_unit_vector(rng);
+    // Amplitude direction: a random unit vector projected onto the plane perpendicular to k.
+    Eigen::Vector3d dir;
+    do {
+      dir = uniform_unit_vector(rng);
+      dir -= dir.dot(mode.k) / mode.k.squaredNorm() * mode.k;
+    } while (dir.norm() < 1e-3);
+    mode.a = dir.normalized() * std::pow(kmag, -1.0 / 3.0);
+    mode.phase = 2 * kPi * rng.uniform_double();
+    sum_a2 += mode.a.squaredNorm();
+    modes_.push_back(mode);
+  }
+  // <|u|^2> = sum |a|^2 / 2 must equal 3 rms^2 (isotropic).
+  const double scale = options.turbulence_rms_m_s * std::sqrt(6.0 / sum_a2);
+  for (Mode& mode : modes_) {
+    mode.a *= scale;
+    mode.omega = options.turbulence_rms_m_s * mode.k.norm();
+    max_gust_ += mode.a.norm();
+  }
+}
+
+Eigen::Vector3d WindField::air_velocity(const Eigen::Vector3d& p, double t) const {
+  Eigen::Vector3d u = options_.mean_m_s;
+  for (const Mode& m : modes_)
+    u += m.a * std::sin(m.k.dot(p - options_.mean_m_s * t) - m.omega * t + m.phase);
+  return u;
+}
+
+void WindField::particle_response(const Eigen::Vector3d& x_ref, double fall, double tau, double t,
+                                  Eigen::Vector3d* disp, Eigen::Vector3d* vel) const {
+  disp->setZero();
+  vel->setZero();
+  for (const Mode& m : modes_) {
+    // Phase along the undisturbed path: k.(x_ref - fall z t) - omega t + phase = theta0 + Omega t.
+    const double theta0 = m.k.dot(x_ref) + m.phase;
+    const double omega = -(m.k.z() * fall + m.omega);
+    // First-order low-pass of a sinusoid: gain 1/sqrt(1 + (Omega tau)^2), lag atan(Omega tau).
+    const double gain = 1.0 / std::sqrt(1.0 + omega * omega * tau * tau);
+    const double lag = std::atan(omega * tau);
+    const double th = theta0 - lag;
+    *vel += gain * m.a * std::sin(th + omega * t);
+    // Int_0^t sin(th + Omega s) ds = t sinc(Omega t / 2) sin(th + Omega t / 2).
+    *disp += gain * m.a * (t * sinc(0.5 * omega * t) * std::sin(th + 0.5 * omega * t));
+  }
+}
+
+}  // namespace weathergs
