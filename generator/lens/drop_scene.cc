@@ -372,7 +372,7 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
   const GlassPlane& plane = scene.plane();
   const double eta_water = options.refractive_index;
   Eigen::Vector3d o = o0, d = d0.normalized();
-  double w = 1, env = 0;
+  double w = 1;  // weight of the followed path; the rest went to the environment
   bool in_water = false;
   int skip_prim = -1, bounces = 0;
   // Every boundary event either changes medium or counts a bounce, so this only stops a ray that
@@ -380,7 +380,6 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
   const int max_events = 4 * options.max_bounces + 64;
   for (int ev = 0;; ++ev) {
     if (ev >= max_events) {
-      env += w;
       w = 0;
       break;
     }
@@ -424,7 +423,6 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
       ++res.internal_reflections;
     } else {
       e.reflectance = reflectance;
-      env += w * reflectance;
       w *= 1 - reflectance;
       d = *refracted;
       in_water = !in_water;
@@ -434,13 +432,11 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
     o = p;
     skip_prim = base_event ? -1 : prim;
     if (bounces > options.max_bounces) {
-      env += w;
       w = 0;
       break;
     }
   }
   if (in_water) {  // lost inside (numerically): no direction to look up
-    env += w;
     w = 0;
   }
   res.exit_direction = d;
@@ -449,11 +445,11 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
     return res;
   }
   if (w > 0 && d.z() <= kMinForwardZ) {
-    env += w;
     w = 0;
   }
-  res.scene_weight = w;
-  res.environment_weight = env;
+  // Everything not followed (Fresnel reflections, cut paths) is the exact complement of w.
+  res.scene_weight = std::clamp(w, 0.0, 1.0);
+  res.environment_weight = 1.0 - res.scene_weight;
   return res;
 }
 
