@@ -138,6 +138,28 @@ TEST_F(EvaluatorCli, BadRendersAreClearErrorsAndLeaveNoResults) {
   EXPECT_EQ(testing::count_entries(dir.path()), 0);
 }
 
+TEST_F(EvaluatorCli, BrokenGroundTruthDatasetIsBadInput) {
+  TempDir dir;
+  const std::string gt = dir / "gt";
+  fs::copy(ds(), gt, fs::copy_options::recursive);
+  const std::string out = dir / "r.json";
+  const std::string eval = kBin + " --quiet evaluate --no-lpips --gt " + gt + " --renders " + renders("noise") + " -o " + out;
+  Json j = read_json_file(gt + "/dataset.json");
+  j["splits"]["test"].push_back("999");  // a view cameras.json does not have
+  write_file_atomic(gt + "/dataset.json", j.dump());
+  expect_bad_input(eval, "'999' is not in cameras.json", out);
+  j = read_json_file(ds() + "/dataset.json");
+  j["weathr"] = "rain";
+  write_file_atomic(gt + "/dataset.json", j.dump());
+  expect_bad_input(eval, "'weathr'", out);
+  write_file_atomic(gt + "/dataset.json", "{\"format\": \"weathergs-dataset\",");
+  expect_bad_input(eval, "malformed JSON", out);
+  write_file_atomic(gt + "/dataset.json", read_file(ds() + "/dataset.json"));
+  fs::remove_all(gt + "/clean");
+  expect_bad_input(eval, "no clean/ folder", out);
+  EXPECT_EQ(testing::count_entries(dir.path()), 1);  // only gt/
+}
+
 TEST_F(EvaluatorCli, NoLpipsIsRecorded) {
   TempDir out;
   auto r = run_command(kBin + " --quiet evaluate --no-lpips --ssim-padding same --gt " + ds() + " --renders " +
