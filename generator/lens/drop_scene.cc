@@ -87,6 +87,10 @@ struct DropScene::Query {
   Eigen::Vector3d o, d;
   double t_min = 0;
   int skip_prim = -1;
+  // Nearest crossing accepted so far (mutable: the filter receives a const context).
+  mutable float best_t_float = std::numeric_limits<float>::infinity();
+  mutable double best_t = 0;
+  mutable int best_prim = -1;
 };
 
 DropScene::DropScene(const EmbreeDevice& device, const GlassPlane& plane, std::vector<PlacedDrop> drops,
@@ -147,7 +151,8 @@ void DropScene::build_footprint_grid() {
     max_a = std::max(max_a, p.base_radius);
   }
   const double extent = std::max(hi.x() - lo.x(), hi.y() - lo.y());
-  grid_cell_ = std::max({2 * max_a, extent / 256, 1e-12});
+  // About one drop per cell for typical fields: a disk spans a few cells, a lookup tests few disks.
+  grid_cell_ = std::max({max_a / 2, extent / 256, 1e-12});
   grid_lo_ = lo;
   grid_nx_ = std::max(1, int(std::ceil((hi.x() - lo.x()) / grid_cell_)));
   grid_ny_ = std::max(1, int(std::ceil((hi.y() - lo.y()) / grid_cell_)));
@@ -296,6 +301,13 @@ void DropScene::filter(const RTCFilterFunctionNArguments* args) {
     double t;
     if (s.geometry_ == CapGeometry::kAnalytic) {
       drop = int(prim);
+      // Cheap rejection of crossings far below the glass (the lower part of a flat drop's sphere)
+      // before the double-precision re-solve; the margin covers float error at the sphere's scale.
+      const Eigen::Vector3d p_float = q->o + t_float * q->d;
+      if (s.plane_.height(p_float) < -1e-5 * (s.drops_[drop].sphere_radius + p_float.norm())) {
+        args->valid[i] = 0;
+        continue;
+      }
       std::optional<double> r = s.refine_sphere_t(q->o, q->d, drop, t_float);
       if (!r) {
         args->valid[i] = 0;
@@ -310,7 +322,16 @@ void DropScene::filter(const RTCFilterFunctionNArguments* args) {
       drop = s.prim_drop_[prim];
       t = t_float;
     }
-    if (!(t > q->t_min) || !s.on_boundary(q->o + t * q->d, drop)) args->valid[i] = 0;
+    if (!(t > q->t_min) || !s.on_boundary(q->o + t * q->d, drop)) {
+      args->valid[i] = 0;
+      continue;
+    }
+    // Embree keeps the nearest accepted crossing; remember its double-precision distance.
+    if (t_float <= q->best_t_float) {
+      q->best_t_float = t_float;
+      q->best_t = t;
+      q->best_prim = int(prim);
+    }
   }
 }
 
@@ -348,9 +369,8 @@ std::optional<CapHit> DropScene::intersect_boundary(const Eigen::Vector3d& o, co
   if (prim_out) *prim_out = int(prim);
   if (geometry_ == CapGeometry::kAnalytic) {
     hit.drop = int(prim);
-    std::optional<double> t = refine_sphere_t(o, d, hit.drop, rh.ray.tfar);
-    WGS_CHECK(t.has_value());  // the filter accepted this very crossing
-    hit.t = *t;
+    WGS_CHECK_EQ(q.best_prim, hit.drop);  // the filter accepted this very crossing
+    hit.t = q.best_t;
     hit.normal = (o + hit.t * d - drops_[hit.drop].sphere_center).normalized();
   } else {
     hit.drop = prim_drop_[prim];
@@ -393,10 +413,21 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
       if (t > t_eps) t_plane = t;
     }
     int prim = -1;
-    std::optional<CapHit> cap = scene.intersect_boundary(o, d, t_eps, kInf, skip_prim, &prim);
+    std::optional<CapHit> cap;
     bool base_event = false;
-    if (t_plane < kInf && (!cap || t_plane < cap->t))
-      base_event = in_water || scene.in_footprint(o + t_plane * d);
+    if (!in_water && t_plane < kInf && plane.height(o) < 0) {
+      // From the dry side no cap lies before the glass: the footprint decides without Embree.
+      base_event = scene.in_footprint(o + t_plane * d);
+      if (!base_event) {
+        cap = scene.intersect_boundary(o, d, t_eps, kInf, skip_prim, &prim);
+        ++res.boundary_queries;
+      }
+    } else {
+      cap = scene.intersect_boundary(o, d, t_eps, kInf, skip_prim, &prim);
+      ++res.boundary_queries;
+      if (t_plane < kInf && (!cap || t_plane < cap->t))
+        base_event = in_water || scene.in_footprint(o + t_plane * d);
+    }
     if (!base_event && !cap) break;
     const double t = base_event ? t_plane : cap->t;
     const Eigen::Vector3d p = o + t * d;

@@ -119,6 +119,7 @@ struct PathResult {
   double scene_weight = 0;        // of the scene radiance along exit_direction
   double environment_weight = 0;  // of the environment radiance (reflections, paths cut short)
   int internal_reflections = 0;
+  int boundary_queries = 0;  // Embree ray casts made for this path
 };
 
 struct TraceOptions {

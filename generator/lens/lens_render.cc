@@ -1,6 +1,7 @@
 #include "generator/lens/lens_render.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
@@ -225,7 +226,8 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
 
   // Premultiplied droplet radiance (3) and coverage (1) per extended pixel.
   cv::Mat layer(eh, ew, CV_32FC4, cv::Scalar::all(0));
-  std::vector<int64_t> row_rays(eh, 0), row_water(eh, 0);
+  std::vector<int64_t> row_rays(eh, 0), row_water(eh, 0), row_embree(eh, 0);
+  const auto t0 = std::chrono::steady_clock::now();
   parallel_for(0, eh, [&](int64_t ey) {
     cv::Vec4f* out = layer.ptr<cv::Vec4f>(int(ey));
     const uint8_t* cand = candidate.data() + size_t(ey) * ew;
@@ -241,6 +243,7 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
         const double u = x + ((s % nx) + jx) / nx, v = y + ((s / nx) + jy) / ny;
         const Eigen::Vector3d d = Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0).normalized();
         const PathResult path = trace_path(scene, Eigen::Vector3d::Zero(), d, topt);
+        row_embree[ey] += path.boundary_queries;
         if (!path.touched_water) continue;
         ++covered;
         Eigen::Vector3d l = path.environment_weight * environment;
@@ -260,7 +263,10 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
   for (int y = 0; y < eh; ++y) {
     res.camera_rays += row_rays[y];
     res.water_rays += row_water[y];
+    res.embree_rays += row_embree[y];
   }
+  const auto t1 = std::chrono::steady_clock::now();
+  res.trace_seconds = std::chrono::duration<double>(t1 - t0).count();
   device_->throw_if_error("tracing view " + camera.name);
 
   if (blur > 0) {
@@ -268,6 +274,7 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
     cv::filter2D(layer, blurred, -1, disk_kernel(blur), cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
     layer = blurred;
   }
+  res.blur_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   for (int y = 0; y < h; ++y) {
     const cv::Vec4f* row = layer.ptr<cv::Vec4f>(y + pad) + pad;
     for (int x = 0; x < w; ++x) {

@@ -31,6 +31,8 @@ struct LensViewResult {
   Json drops;      // {"view", "time_s", "blur_diameter_px", "drops": [...]} (docs/lens_droplets.md)
   int64_t camera_rays = 0;   // camera rays traced (pixels near no drop are not traced)
   int64_t water_rays = 0;    // of which touched water
+  int64_t embree_rays = 0;   // Embree ray casts, all path segments
+  double trace_seconds = 0, blur_seconds = 0;
   double blur_diameter_px = 0;
 };
 

@@ -1,0 +1,2 @@
+add_executable(bench_generator_lens ${CMAKE_CURRENT_LIST_DIR}/generator_lens_bench.cc)
+target_link_libraries(bench_generator_lens PRIVATE weathergs_generator benchmark::benchmark)
