@@ -82,6 +82,29 @@ cv::Mat disk_kernel(double diameter_px) {
   return k;
 }
 
+}  // namespace
+
+cv::Mat disk_blur(const cv::Mat& layer, double diameter_px, double full_resolution_max_px) {
+  cv::Mat out;
+  if (diameter_px <= full_resolution_max_px) {
+    cv::filter2D(layer, out, -1, disk_kernel(diameter_px), cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+    return out;
+  }
+  // Wide disks: k x k box average, the disk at 1/k resolution, bilinear upsampling back. The layer is
+  // zero-padded to a multiple of k so that both resamplings are exact integer factors.
+  const int k = std::max(2, int(std::floor(diameter_px / full_resolution_max_px)));
+  const int w = (layer.cols + k - 1) / k * k, h = (layer.rows + k - 1) / k * k;
+  cv::Mat padded(h, w, layer.type(), cv::Scalar::all(0));
+  layer.copyTo(padded(cv::Rect(0, 0, layer.cols, layer.rows)));
+  cv::Mat small, blurred_small, up;
+  cv::resize(padded, small, cv::Size(w / k, h / k), 0, 0, cv::INTER_AREA);
+  cv::filter2D(small, blurred_small, -1, disk_kernel(diameter_px / k), cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+  cv::resize(blurred_small, up, cv::Size(w, h), 0, 0, cv::INTER_LINEAR);
+  return up(cv::Rect(0, 0, layer.cols, layer.rows)).clone();
+}
+
+namespace {
+
 uint64_t pixel_key(int x, int y) {
   // Offsets keep guard-band pixels (negative coordinates) distinct and positive.
   constexpr int64_t kOffset = int64_t(1) << 30;
@@ -270,9 +293,7 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
   device_->throw_if_error("tracing view " + camera.name);
 
   if (blur > 0) {
-    cv::Mat blurred;
-    cv::filter2D(layer, blurred, -1, disk_kernel(blur), cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
-    layer = blurred;
+    layer = disk_blur(layer, blur, kDiskBlurFullResolutionMaxPx);
   }
   res.blur_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   for (int y = 0; y < h; ++y) {

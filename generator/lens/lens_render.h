@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 
 #include "core/camera.h"
@@ -44,6 +45,15 @@ double circle_of_confusion_px(const Camera& camera, double object_distance_m);
 // Largest blur diameter applied (pixels): beyond it the glass is a uniform veil anyway and the
 // kernel cost grows quadratically; recorded in the per-view JSON when it clips.
 constexpr double kMaxBlurDiameterPx = 256;
+
+// Disk blur (normalized, anti-aliased disk of the given diameter, zero outside the layer) of a
+// float cv::Mat with any channel count. Diameters above full_resolution_max_px are computed at 1/k
+// resolution, k = floor(diameter / full_resolution_max_px) (box average down, bilinear up): the
+// result is then a disk convolved with a k-px box and tent, k / diameter <= 1/full_resolution_max_px
+// wider, at a cost independent of the diameter. The layer mean is kept either way.
+constexpr double kDiskBlurFullResolutionMaxPx = 32;
+cv::Mat disk_blur(const cv::Mat& layer, double diameter_px,
+                  double full_resolution_max_px = kDiskBlurFullResolutionMaxPx);
 
 class LensDropletRenderer {
  public:

@@ -288,3 +288,36 @@ TEST(LensRenderTest, RejectsBadInputs) {
 
 }  // namespace
 }  // namespace weathergs::lens
+
+namespace weathergs::lens {
+namespace {
+
+TEST(LensDiskBlurTest, ReducedResolutionMatchesTheFullDisk) {
+  // A sparse layer of bright squares; a 96 px disk at full resolution vs at 1/3 resolution.
+  cv::Mat layer(200, 260, CV_32FC2, cv::Scalar::all(0));
+  for (int i = 0; i < 12; ++i) layer(cv::Rect(20 + 19 * i, 30 + 11 * i, 9, 6)).setTo(cv::Scalar(1.0, 0.5));
+  cv::Mat exact = disk_blur(layer, 96, 1e9), fast = disk_blur(layer, 96, 32);
+  ASSERT_EQ(fast.size(), layer.size());
+  ASSERT_EQ(fast.type(), layer.type());
+  // The blur keeps the layer's mass (inside the frame: the squares sit >= 48 px from the border
+  // except a few, so compare the two blurs with each other).
+  const cv::Scalar se = cv::sum(exact), sf = cv::sum(fast);
+  EXPECT_NEAR(sf[0], se[0], 0.01 * se[0]);
+  double max_exact = 0, max_diff = 0;
+  cv::minMaxLoc(exact.reshape(1), nullptr, &max_exact);
+  cv::Mat diff;
+  cv::absdiff(exact, fast, diff);
+  cv::minMaxLoc(diff.reshape(1), nullptr, &max_diff);
+  // The extra 3 px box + tent on a 96 px disk moves its edge by ~1.5 px: <= 5 % of the peak.
+  EXPECT_LT(max_diff, 0.05 * max_exact);
+  // A single pixel spreads to a disk of the requested diameter.
+  cv::Mat dot(101, 101, CV_32F, cv::Scalar(0));
+  dot.at<float>(50, 50) = 1;
+  cv::Mat disk = disk_blur(dot, 21, 1e9);
+  EXPECT_NEAR(cv::sum(disk)[0], 1.0, 1e-5);
+  EXPECT_GT(disk.at<float>(50, 59), 0);   // inside radius 10.5
+  EXPECT_LT(std::abs(disk.at<float>(50, 62)), 1e-9);  // outside (DFT round-off only)
+}
+
+}  // namespace
+}  // namespace weathergs::lens
