@@ -196,8 +196,26 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
     PixelRect rect = project_ball(camera, c, r, pad, ew, eh);
     if (rect.empty()) continue;
     visible.push_back(p);
-    for (int y = rect.y0; y < rect.y1; ++y)
-      std::fill(candidate.begin() + size_t(y) * ew + rect.x0, candidate.begin() + size_t(y) * ew + rect.x1, 1);
+    const double dist = c.norm();
+    if (r >= dist * 0.999) {  // the camera is (nearly) inside the ball: every pixel of the rectangle
+      for (int y = rect.y0; y < rect.y1; ++y)
+        std::fill(candidate.begin() + size_t(y) * ew + rect.x0, candidate.begin() + size_t(y) * ew + rect.x1, 1);
+      continue;
+    }
+    // Pixels whose center ray is within the ball's angular radius plus half a pixel diagonal
+    // (< 1 / focal length radians anywhere in the image) of its center direction.
+    const double cone = std::min(kPi, std::asin(r / dist) + 1.0 / std::min(camera.fx, camera.fy));
+    const double cos_cone = std::cos(cone);
+    const Eigen::Vector3d axis = c / dist;
+    for (int y = rect.y0; y < rect.y1; ++y) {
+      const double dy = (y - pad + 0.5 - camera.cy) / camera.fy;
+      uint8_t* row = candidate.data() + size_t(y) * ew;
+      for (int x = rect.x0; x < rect.x1; ++x) {
+        const double dx = (x - pad + 0.5 - camera.cx) / camera.fx;
+        const double dot = (axis.x() * dx + axis.y() * dy + axis.z()) / std::sqrt(dx * dx + dy * dy + 1);
+        if (dot >= cos_cone) row[x] = 1;
+      }
+    }
   }
   res.blur_diameter_px = blur;
   res.drops["blur_diameter_px"] = blur;
