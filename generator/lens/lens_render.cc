@@ -84,23 +84,35 @@ cv::Mat disk_kernel(double diameter_px) {
 
 }  // namespace
 
+namespace {
+
+// Disk blur of a layer given at 1/k resolution (diameter in full-resolution pixels), upsampled
+// bilinearly by k and cropped to cols x rows.
+cv::Mat blur_reduced(const cv::Mat& small, double diameter_px, int k, int cols, int rows) {
+  cv::Mat blurred, up;
+  cv::filter2D(small, blurred, -1, disk_kernel(diameter_px / k), cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
+  if (k == 1) return blurred;
+  cv::resize(blurred, up, cv::Size(small.cols * k, small.rows * k), 0, 0, cv::INTER_LINEAR);
+  return up(cv::Rect(0, 0, cols, rows)).clone();
+}
+
+// Reduction factor for a blur of this diameter (1: full resolution).
+int blur_reduction(double diameter_px, double full_resolution_max_px) {
+  if (diameter_px <= full_resolution_max_px) return 1;
+  return std::max(2, int(std::floor(diameter_px / full_resolution_max_px)));
+}
+
+}  // namespace
+
 cv::Mat disk_blur(const cv::Mat& layer, double diameter_px, double full_resolution_max_px) {
-  cv::Mat out;
-  if (diameter_px <= full_resolution_max_px) {
-    cv::filter2D(layer, out, -1, disk_kernel(diameter_px), cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
-    return out;
-  }
-  // Wide disks: k x k box average, the disk at 1/k resolution, bilinear upsampling back. The layer is
-  // zero-padded to a multiple of k so that both resamplings are exact integer factors.
-  const int k = std::max(2, int(std::floor(diameter_px / full_resolution_max_px)));
+  const int k = blur_reduction(diameter_px, full_resolution_max_px);
+  if (k == 1) return blur_reduced(layer, diameter_px, 1, layer.cols, layer.rows);
+  // Zero-padded to a multiple of k so that both resamplings are exact integer factors.
   const int w = (layer.cols + k - 1) / k * k, h = (layer.rows + k - 1) / k * k;
-  cv::Mat padded(h, w, layer.type(), cv::Scalar::all(0));
+  cv::Mat padded(h, w, layer.type(), cv::Scalar::all(0)), small;
   layer.copyTo(padded(cv::Rect(0, 0, layer.cols, layer.rows)));
-  cv::Mat small, blurred_small, up;
   cv::resize(padded, small, cv::Size(w / k, h / k), 0, 0, cv::INTER_AREA);
-  cv::filter2D(small, blurred_small, -1, disk_kernel(diameter_px / k), cv::Point(-1, -1), 0, cv::BORDER_CONSTANT);
-  cv::resize(blurred_small, up, cv::Size(w, h), 0, 0, cv::INTER_LINEAR);
-  return up(cv::Rect(0, 0, layer.cols, layer.rows)).clone();
+  return blur_reduced(small, diameter_px, k, layer.cols, layer.rows);
 }
 
 namespace {
@@ -265,26 +277,36 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
   const int ny = (spp + nx - 1) / nx;
   const uint64_t stream = kStreamLensPixels ^ fnv1a64(camera.name);
 
-  // Premultiplied droplet radiance (3) and coverage (1) per extended pixel.
-  cv::Mat layer(eh, ew, CV_32FC4, cv::Scalar::all(0));
-  std::vector<int64_t> row_rays(eh, 0), row_water(eh, 0), row_embree(eh, 0);
+  // Premultiplied droplet radiance (3) and coverage (1) per trace cell. A cell is one pixel of the
+  // extended raster, or k x k pixels when the blur is wide enough to be computed at 1/k resolution
+  // (disk_blur): samples_per_pixel stratified samples then cover the whole cell, and the blur averages
+  // ~(blur / k)^2 cells, so the noise stays below that of the full-resolution case.
+  const int k = blur > 0 ? blur_reduction(blur, kDiskBlurFullResolutionMaxPx) : 1;
+  const int tw = (ew + k - 1) / k, th = (eh + k - 1) / k;
+  res.drops["trace_cell_px"] = k;
+  std::vector<uint8_t> cell_candidate(size_t(tw) * th, 0);
+  for (int y = 0; y < eh; ++y)
+    for (int x = 0; x < ew; ++x)
+      if (candidate[size_t(y) * ew + x]) cell_candidate[size_t(y / k) * tw + x / k] = 1;
+  cv::Mat layer(th, tw, CV_32FC4, cv::Scalar::all(0));
+  std::vector<int64_t> row_rays(th, 0), row_water(th, 0), row_embree(th, 0);
   const auto t0 = std::chrono::steady_clock::now();
-  parallel_for(0, eh, [&](int64_t ey) {
-    cv::Vec4f* out = layer.ptr<cv::Vec4f>(int(ey));
-    const uint8_t* cand = candidate.data() + size_t(ey) * ew;
-    const int y = int(ey) - pad;
-    for (int ex = 0; ex < ew; ++ex) {
-      if (!cand[ex]) continue;
-      const int x = ex - pad;
-      Rng rng(seed_, stream, pixel_key(x, y));
+  parallel_for(0, th, [&](int64_t ty) {
+    cv::Vec4f* out = layer.ptr<cv::Vec4f>(int(ty));
+    const uint8_t* cand = cell_candidate.data() + size_t(ty) * tw;
+    const int y = int(ty) * k - pad;  // image coordinates of the cell's top-left pixel
+    for (int tx = 0; tx < tw; ++tx) {
+      if (!cand[tx]) continue;
+      const int x = tx * k - pad;
+      Rng rng(seed_, stream ^ uint64_t(k - 1), pixel_key(x, y));
       Eigen::Vector3d radiance = Eigen::Vector3d::Zero();
       int covered = 0;
       for (int s = 0; s < spp; ++s) {
         const double jx = rng.uniform_double(), jy = rng.uniform_double();
-        const double u = x + ((s % nx) + jx) / nx, v = y + ((s / nx) + jy) / ny;
+        const double u = x + k * ((s % nx) + jx) / nx, v = y + k * ((s / nx) + jy) / ny;
         const Eigen::Vector3d d = Eigen::Vector3d((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0).normalized();
         const PathResult path = trace_path(scene, Eigen::Vector3d::Zero(), d, topt);
-        row_embree[ey] += path.boundary_queries;
+        row_embree[ty] += path.boundary_queries;
         if (!path.touched_water) continue;
         ++covered;
         Eigen::Vector3d l = path.environment_weight * environment;
@@ -295,13 +317,13 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
         }
         radiance += l;
       }
-      row_rays[ey] += spp;
-      row_water[ey] += covered;
-      out[ex] = cv::Vec4f(float(radiance[0] / spp), float(radiance[1] / spp), float(radiance[2] / spp),
+      row_rays[ty] += spp;
+      row_water[ty] += covered;
+      out[tx] = cv::Vec4f(float(radiance[0] / spp), float(radiance[1] / spp), float(radiance[2] / spp),
                           float(double(covered) / spp));
     }
   });
-  for (int y = 0; y < eh; ++y) {
+  for (int y = 0; y < th; ++y) {
     res.camera_rays += row_rays[y];
     res.water_rays += row_water[y];
     res.embree_rays += row_embree[y];
@@ -310,9 +332,7 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
   res.trace_seconds = std::chrono::duration<double>(t1 - t0).count();
   device_->throw_if_error("tracing view " + camera.name);
 
-  if (blur > 0) {
-    layer = disk_blur(layer, blur, kDiskBlurFullResolutionMaxPx);
-  }
+  if (blur > 0) layer = blur_reduced(layer, blur, k, ew, eh);
   res.blur_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
   for (int y = 0; y < h; ++y) {
     const cv::Vec4f* row = layer.ptr<cv::Vec4f>(y + pad) + pad;
