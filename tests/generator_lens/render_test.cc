@@ -250,6 +250,17 @@ TEST(LensRenderTest, DefocusFollowsTheThinLensAndKeepsCoverageMass) {
     return n;
   };
   EXPECT_GT(count_if(blurred.coverage, 0.01f, 0.99f), 2 * count_if(sharp.coverage, 0.01f, 0.99f));
+  // A blur wider than 32 px is traced on 2x2-pixel cells: same coverage mass up to sampling noise
+  // (a few hundred water samples per drop: ~5 %), and a uniform scene stays uniform.
+  cam.focal_length_mm = 12;  // 39.8 px
+  LensViewResult wide = with("true");
+  EXPECT_GT(wide.blur_diameter_px, 32);
+  EXPECT_EQ(wide.drops["trace_cell_px"], 2);
+  EXPECT_NEAR(mean(wide.coverage), mean(sharp.coverage), 0.05 * mean(sharp.coverage));
+  Image flat(cam.width, cam.height, 3, ColorSpace::kLinear, 0.3f);
+  std::string flat_spec = text;
+  flat_spec.replace(flat_spec.find("DEFOCUS"), 7, "true");
+  EXPECT_LT(max_abs_diff(LensDropletRenderer(spec_from(flat_spec), 4, cam).render(flat, cam, 0.0).image, flat), 1e-5);
   // The mask is the documented threshold of the blurred coverage.
   for (size_t i = 0; i < blurred.mask.data.size(); ++i)
     ASSERT_EQ(blurred.mask.data[i], blurred.coverage.data[i] >= 0.1f ? 1.f : 0.f);
