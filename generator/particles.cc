@@ -38,8 +38,8 @@ const char* to_string(Species s) { return s == Species::kRain ? "rain" : "snow";
 
 std::string ParticleId::to_string() const {
   std::ostringstream o;
-  o << weathergs::to_string(Species(species)) << "/" << size_class << "/" << cell.x() << "," << cell.y()
-    << "," << cell.z() << "/" << index;
+  o << weathergs::to_string(Species(species)) << "/" << size_class << "/" << cell.x() << ":" << cell.y()
+    << ":" << cell.z() << "/" << index;
   return o.str();
 }
 

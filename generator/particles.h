@@ -61,7 +61,7 @@ struct ParticleId {
   int species = 0, size_class = 0;
   CellIndex cell = CellIndex::Zero();
   int index = 0;
-  std::string to_string() const;  // "rain/3/12,-4,7/5"
+  std::string to_string() const;  // "rain/3/12:-4:7/5" (species/class/cell/index)
 };
 
 struct Particle {

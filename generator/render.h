@@ -8,7 +8,7 @@
 //  * point (R < 0.5 px): mass m = a0 pi R^2 spread over the pixels the segment crosses in proportion
 //    to the exact length of the segment inside each pixel (analytic segment-pixel overlap);
 //  * disk (R >= 0.5 px): the exact time fraction during which each point is inside the moving disk
-//    (segment-circle chord), averaged over S x S points per pixel (S = 4 for R < 1.33 .. 1 for R >= 4).
+//    (segment-circle chord), averaged over S x S points per pixel (S = ceil(32 / R) clamped to 1..16).
 // Both conserve the mass a0 pi R^2. Alphas of one particle are summed per pixel, then particles are
 // composited order-independently: A = 1 - prod(1 - alpha_i), radiance sum(alpha_i L_i) / sum(alpha_i)
 // (exact when particles do not overlap in time and space, which a pixel's time-averaged coverage

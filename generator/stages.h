@@ -1,0 +1,85 @@
+// The weather pipeline as a list of stages. Each stage transforms one view's linear radiance in
+// place; run_weather (generator/weather.h) runs them in order on every view, times them, and records
+// them in dataset.json's generator.stages. Order: fog, rain, snow, then lens effects (a lens stage is
+// appended last: it sees the weathered scene through the droplets on the glass).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "core/camera.h"
+#include "core/image.h"
+#include "core/json_reader.h"
+#include "generator/particles.h"
+#include "generator/render.h"
+#include "generator/weather_spec.h"
+
+namespace weathergs {
+
+// Planar depths at or beyond this are background (DATASET_FORMAT.md says >= 1e9 or +inf; Blender's
+// EEVEE writes 65504, the largest half float).
+constexpr float kBackgroundDepth_m = 65504.0f;
+
+// One view passing through the stages.
+struct WeatherView {
+  const Camera& camera;          // spec overrides applied
+  const Image& clean;            // linear RGB
+  const Image& depth;            // planar z, 1 channel
+  const EnvironmentLight& environment;
+  Image radiance;                // linear RGB; starts as the clean image
+  Image particle_alpha;          // 1 channel: 1 - prod(1 - A_stage) over the particle stages
+  bool has_particles = false;    // a particle stage ran (masks/particles is written)
+  FogState fog;                  // set by the fog stage for later stages
+  std::map<std::string, Image> layers;       // float layers: layers/<name>/<view>.exr
+  std::map<std::string, std::string> texts;  // text layers: layers/<name>/<view>.csv
+  std::map<std::string, int64_t> counters;   // summed over views into generator.stage_counters
+};
+
+class WeatherStage {
+ public:
+  virtual ~WeatherStage() = default;
+  virtual std::string name() const = 0;
+  // Called concurrently for different views: must not modify the stage.
+  virtual void run(WeatherView& view) const = 0;
+};
+
+// Fog: transmittance t = exp(-beta * ray length) from the clean depth (background: t = 0);
+// radiance = radiance * t + airlight * (1 - t). Writes layers/fog_transmittance.
+class FogStage : public WeatherStage {
+ public:
+  FogStage(double beta_per_m, const Eigen::Vector3f& airlight) : beta_(beta_per_m), airlight_(airlight) {}
+  std::string name() const override { return "fog"; }
+  void run(WeatherView& view) const override;
+
+ private:
+  double beta_;
+  Eigen::Vector3f airlight_;
+};
+
+// Rain or snow: the world-space particle field rendered into the view (docs/generator.md).
+// Writes layers/<species>_alpha and the manifest layers/particles_<species>/<view>.csv.
+class ParticleStage : public WeatherStage {
+ public:
+  ParticleStage(const ParticleEffectSpec& effect, const RenderOptions& render, uint64_t seed, bool manifest);
+  std::string name() const override { return to_string(field_.options().species); }
+  void run(WeatherView& view) const override;
+  const ParticleField& field() const { return field_; }
+
+ private:
+  ParticleField field_;
+  ParticleAppearance appearance_;
+  RenderOptions render_;
+  bool manifest_;
+};
+
+// Cells of class k of the field that can hold a particle visible in the view (frustum from near_m
+// to distance_m, dilated by the motion over the exposure), in a fixed order.
+std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Camera& camera,
+                                     double near_m, double distance_m);
+
+// The manifest's CSV header (one row per drawn particle).
+extern const char* const kManifestHeader;
+
+}  // namespace weathergs

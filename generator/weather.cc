@@ -1,0 +1,238 @@
+#include "generator/weather.h"
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <set>
+
+#include "core/atomic_file.h"
+#include "core/dataset.h"
+#include "core/image.h"
+#include "core/parallel.h"
+#include "core/progress.h"
+#include "generator/stages.h"
+
+#include <OpenImageIO/imageio.h>
+#include "generator/weather_spec.h"
+
+namespace weathergs {
+
+namespace fs = std::filesystem;
+
+namespace {
+constexpr const char* kGeneratorVersion = "weathergs-generator 1";
+constexpr double kSkyFraction = 0.005;  // brightest 0.5% of the pixels
+
+double luminance(const Image& img, size_t p) {
+  return 0.2126 * img.data[p * img.channels] + 0.7152 * img.data[p * img.channels + 1] +
+         0.0722 * img.data[p * img.channels + 2];
+}
+
+// The stages the spec calls for, in pipeline order.
+std::vector<std::unique_ptr<WeatherStage>> make_stages(const WeatherSpec& spec, const Eigen::Vector3f& airlight,
+                                                       bool manifest) {
+  std::vector<std::unique_ptr<WeatherStage>> stages;
+  if (spec.fog) stages.push_back(std::make_unique<FogStage>(spec.fog->beta_per_m, airlight));
+  if (spec.rain) stages.push_back(std::make_unique<ParticleStage>(*spec.rain, spec.render, spec.seed, manifest));
+  if (spec.snow) stages.push_back(std::make_unique<ParticleStage>(*spec.snow, spec.render, spec.seed, manifest));
+  // Lens droplets are appended here, after the airborne stages (docs/generator.md).
+  return stages;
+}
+
+std::string clean_image_path(const Dataset& d, const std::string& view) {
+  const std::string a = d.path("clean", view), b = d.path("images", view);
+  if (fs::exists(a)) return a;
+  if (fs::exists(b)) return b;
+  throw InputError(a, "no clean image for view '" + view + "' (looked in clean/ and images/)");
+}
+
+// Float EXR layer, byte-reproducible: OpenEXR stamps the write time as capDate unless DateTime is
+// set; core's write_image does not (yet) clear it, so the generator writes its layers itself.
+void write_layer_exr(const std::string& path, const Image& img) {
+  OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::FLOAT);
+  if (img.channels == 1) spec.channelnames = {"Y"};
+  spec.attribute("compression", "zip");
+  spec.attribute("DateTime", "");
+  write_file_atomic_with(path, [&](const std::string& tmp) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data.data()) || !out->close())
+      throw InputError(path, "cannot write the layer: " + (out ? out->geterror() : OIIO::geterror()));
+  });
+}
+
+void copy_tree(const fs::path& from, const fs::path& to) {
+  fs::create_directories(to);
+  fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+}
+}  // namespace
+
+void WeatherRunOptions::validate() const {
+  if (!(mask_threshold > 0 && mask_threshold <= 1))
+    throw InputError("mask_threshold", "must be in (0, 1], got " + std::to_string(mask_threshold));
+}
+
+std::array<double, 3> estimate_sky_radiance(const Image& img) {
+  const size_t n = img.num_pixels();
+  std::vector<std::pair<double, size_t>> lum(n);
+  for (size_t p = 0; p < n; ++p) lum[p] = {luminance(img, p), p};
+  const size_t k = std::max<size_t>(1, size_t(double(n) * kSkyFraction));
+  std::nth_element(lum.begin(), lum.begin() + long(k - 1), lum.end(), std::greater<>());
+  std::sort(lum.begin(), lum.begin() + long(k), std::greater<>());  // fixed summation order
+  std::array<double, 3> s{0, 0, 0};
+  for (size_t i = 0; i < k; ++i)
+    for (int c = 0; c < 3; ++c) s[size_t(c)] += img.data[lum[i].second * img.channels + c];
+  for (double& v : s) v /= double(k);
+  return s;
+}
+
+Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, const std::string& out_dir,
+                 const WeatherRunOptions& options) {
+  options.validate();
+  WeatherSpec spec = parse_weather_spec(spec_reader);
+  if (options.seed) spec.seed = *options.seed;
+  const Dataset clean = read_dataset(clean_dir);
+
+  // Effective cameras and processing order.
+  std::vector<Camera> cameras;
+  for (const Camera& c : clean.cameras) {
+    Camera e = spec.camera.apply(c);
+    validate_camera(e, spec_reader.where("camera") + " applied to view '" + c.name + "'");
+    if (spec.render.defocus) thin_lens_of(e);  // focus beyond the focal length, else InputError
+    cameras.push_back(e);
+  }
+  std::vector<size_t> order;
+  if (options.view_order.empty()) {
+    for (size_t i = 0; i < cameras.size(); ++i) order.push_back(i);
+  } else {
+    std::map<std::string, size_t> index;
+    for (size_t i = 0; i < cameras.size(); ++i) index[cameras[i].name] = i;
+    std::set<size_t> seen;
+    for (const std::string& v : options.view_order) {
+      auto it = index.find(v);
+      if (it == index.end()) throw InputError("view_order", "no view named '" + v + "'");
+      if (!seen.insert(it->second).second) throw InputError("view_order", "view '" + v + "' listed twice");
+      order.push_back(it->second);
+    }
+    if (order.size() != cameras.size()) throw InputError("view_order", "must list every view exactly once");
+  }
+
+  // Dataset-wide sky radiance (ambient light of the particles, airlight of the fog when "auto").
+  std::vector<std::array<double, 3>> sky_per_view(cameras.size());
+  parallel_for(0, int64_t(cameras.size()), [&](int64_t i) {
+    const Image img = to_linear(to_rgb(read_image(clean_image_path(clean, cameras[size_t(i)].name))));
+    sky_per_view[size_t(i)] = estimate_sky_radiance(img);
+  });
+  Eigen::Vector3f sky = Eigen::Vector3f::Zero();
+  {
+    std::array<double, 3> s{0, 0, 0};
+    for (const auto& v : sky_per_view)
+      for (int c = 0; c < 3; ++c) s[size_t(c)] += v[size_t(c)];
+    for (int c = 0; c < 3; ++c) sky[c] = float(s[size_t(c)] / double(cameras.size()));
+  }
+  const Eigen::Vector3f airlight = spec.fog && spec.fog->airlight ? *spec.fog->airlight : sky;
+
+  const std::vector<std::unique_ptr<WeatherStage>> stages = make_stages(spec, airlight, options.write_manifest);
+
+  AtomicDirectory out(out_dir);
+  const fs::path root(out.path());
+  for (const char* d : {"images", "clean", "depth"}) fs::create_directories(root / d);
+
+  const size_t n_views = cameras.size();
+  std::vector<std::vector<double>> seconds(n_views, std::vector<double>(stages.size(), 0.0));
+  std::vector<std::map<std::string, int64_t>> counters(n_views);
+  std::vector<std::set<std::string>> layer_names(n_views), text_names(n_views);
+  ProgressBar progress("weather", int64_t(n_views));
+  parallel_for(0, int64_t(n_views), [&](int64_t oi) {
+    const size_t i = order[size_t(oi)];
+    const Camera& cam = cameras[i];
+    const std::string src = clean_image_path(clean, cam.name);
+    const Image clean_img = to_linear(to_rgb(read_image(src)));
+    if (clean_img.width != cam.width || clean_img.height != cam.height)
+      throw InputError(src, "image is " + clean_img.to_string() + " but cameras.json says " +
+                                std::to_string(cam.width) + "x" + std::to_string(cam.height));
+    const std::string depth_path = clean.path("depth", cam.name, ".exr");
+    if (!fs::exists(depth_path)) throw InputError(depth_path, "the weather generator needs the clean depth");
+    const Image depth = read_depth(depth_path);
+    if (depth.width != cam.width || depth.height != cam.height)
+      throw InputError(depth_path, "depth is " + depth.to_string() + ", expected the camera size");
+    const EnvironmentLight env = make_environment_light(clean_img, sky);
+    WeatherView view{cam, clean_img, depth, env, clean_img, Image(cam.width, cam.height, 1, ColorSpace::kLinear),
+                     false, FogState{}, {}, {}, {}};
+    for (size_t s = 0; s < stages.size(); ++s) {
+      const auto start = std::chrono::steady_clock::now();
+      stages[s]->run(view);
+      seconds[i][s] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    require_finite(view.radiance, "internal: weathered view '" + cam.name + "'");
+    write_image((root / "images" / (cam.name + ".png")).string(), view.radiance);
+    if (fs::path(src).extension() == ".png") fs::copy_file(src, root / "clean" / (cam.name + ".png"));
+    else write_image((root / "clean" / (cam.name + ".png")).string(), clean_img);
+    fs::copy_file(depth_path, root / "depth" / (cam.name + ".exr"));
+    if (view.has_particles) {
+      fs::create_directories(root / "masks" / "particles");
+      write_mask((root / "masks" / "particles" / (cam.name + ".png")).string(), view.particle_alpha,
+                 float(options.mask_threshold));
+      view.layers["particle_alpha"] = view.particle_alpha;
+    }
+    if (options.write_layers)
+      for (const auto& [name, img] : view.layers) {
+        fs::create_directories(root / "layers" / name);
+        write_layer_exr((root / "layers" / name / (cam.name + ".exr")).string(), img);
+        layer_names[i].insert(name);
+      }
+    for (const auto& [name, text] : view.texts) {
+      fs::create_directories(root / "layers" / name);
+      write_file_atomic((root / "layers" / name / (cam.name + ".csv")).string(), text);
+      text_names[i].insert(name);
+    }
+    counters[i] = view.counters;
+    progress.tick();
+  });
+  progress.finish();
+
+  const fs::path in_root(clean_dir);
+  if (fs::is_directory(in_root / "sparse")) copy_tree(in_root / "sparse", root / "sparse");
+  if (fs::exists(in_root / "transforms.json")) fs::copy_file(in_root / "transforms.json", root / "transforms.json");
+
+  // The generator block: sums in view (cameras.json) order.
+  Json stage_list = Json::array();
+  for (size_t s = 0; s < stages.size(); ++s) {
+    double total = 0;
+    for (size_t i = 0; i < n_views; ++i) total += seconds[i][s];
+    stage_list.push_back({{"name", stages[s]->name()}, {"seconds", total}});
+  }
+  std::map<std::string, int64_t> total_counters;
+  std::set<std::string> layers, texts;
+  for (size_t i = 0; i < n_views; ++i) {
+    for (const auto& [k, v] : counters[i]) total_counters[k] += v;
+    layers.insert(layer_names[i].begin(), layer_names[i].end());
+    texts.insert(text_names[i].begin(), text_names[i].end());
+  }
+  Json block = {{"version", kGeneratorVersion},
+                {"seed", spec.seed},
+                {"spec", spec.to_json()},
+                {"stages", stage_list},
+                {"sky_radiance", {sky[0], sky[1], sky[2]}},
+                {"counters", total_counters},
+                {"outputs", {{"mask_threshold", options.mask_threshold},
+                             {"float_layers", layers},
+                             {"manifests", texts}}}};
+  if (spec.fog) block["airlight"] = {airlight[0], airlight[1], airlight[2]};
+
+  Dataset result;
+  result.root = root.string();
+  result.cameras = cameras;
+  result.info.name = options.name.empty() ? clean.info.name + "_" + spec.weather_name() : options.name;
+  result.info.scene = clean.info.scene;
+  result.info.weather = spec.weather_name();
+  result.info.splits = clean.info.splits;
+  result.info.splits_rule = clean.info.splits_rule;
+  result.info.generator = block;
+  write_dataset(result);
+  out.commit();
+  return block;
+}
+
+}  // namespace weathergs

@@ -1,0 +1,261 @@
+#include "generator/weather_spec.h"
+
+#include <cmath>
+
+#include "core/error.h"
+#include "generator/physics.h"
+
+namespace weathergs {
+
+namespace {
+
+// Turbulence rms as a fraction of the mean wind speed when not given (turbulence intensity of the
+// surface layer, typically 0.1..0.3).
+constexpr double kDefaultTurbulenceIntensity = 0.25;
+
+Eigen::Vector3d read_vec3(const JsonReader& r, const std::string& key, const Eigen::Vector3d& fallback) {
+  if (!r.has(key)) {
+    r.mark(key);
+    return fallback;
+  }
+  JsonReader a = r.child(key);
+  if (!a.is_array() || a.size() != 3) throw InputError(a.where(), "expected an array of 3 numbers");
+  Eigen::Vector3d v;
+  for (size_t i = 0; i < 3; ++i) v[int(i)] = a.at(i).as<double>();
+  if (!v.allFinite()) throw InputError(a.where(), "expected finite numbers");
+  return v;
+}
+
+void read_range(const JsonReader& r, const std::string& key, double out[2]) {
+  if (!r.has(key)) {
+    r.mark(key);
+    return;
+  }
+  JsonReader a = r.child(key);
+  if (!a.is_array() || a.size() != 2) throw InputError(a.where(), "expected [min, max]");
+  out[0] = a.at(0).as<double>();
+  out[1] = a.at(1).as<double>();
+  if (!(out[0] <= out[1])) throw InputError(a.where(), "expected min <= max");
+}
+
+ParticleEffectSpec parse_particles(const JsonReader& r, Species species) {
+  if (!r.is_object()) throw InputError(r.where(), "expected an object");
+  ParticleEffectSpec e;
+  SpeciesOptions& o = e.species;
+  o.species = species;
+  const bool snow = species == Species::kSnow;
+  if (snow) {
+    o.d_max_mm = 5.0;
+    o.opacity = 0.8;
+    o.oblate = false;
+    e.appearance.environment_weight = 0.5;
+    e.appearance.sky_weight = 0.7;
+  }
+  o.rate_mm_h = r.get<double>("rate_mm_h");
+  o.wind.mean_m_s = read_vec3(r, "wind_m_s", Eigen::Vector3d::Zero());
+  o.wind.turbulence_rms_m_s = kDefaultTurbulenceIntensity * o.wind.mean_m_s.norm();
+  if (r.has("turbulence")) {
+    JsonReader t = r.child("turbulence");
+    if (!t.is_object()) throw InputError(t.where(), "expected an object");
+    o.wind.turbulence_rms_m_s = t.get_or<double>("rms_m_s", o.wind.turbulence_rms_m_s);
+    o.wind.length_scale_m = t.get_or<double>("length_scale_m", o.wind.length_scale_m);
+    o.wind.modes = t.get_or<int>("modes", o.wind.modes);
+    t.finish();
+  }
+  double range[2] = {o.d_min_mm, o.d_max_mm};
+  read_range(r, "diameter_range_mm", range);
+  o.d_min_mm = range[0], o.d_max_mm = range[1];
+  o.size_classes = r.get_or<int>("size_classes", o.size_classes);
+  o.particles_per_cell = r.get_or<double>("particles_per_cell", o.particles_per_cell);
+  o.opacity = r.get_or<double>("opacity", o.opacity);
+  if (!snow) o.oblate = r.get_or<bool>("oblate", o.oblate);
+  if (snow && r.has("flutter")) {
+    JsonReader f = r.child("flutter");
+    if (!f.is_object()) throw InputError(f.where(), "expected an object");
+    read_range(f, "amplitude_m", o.flutter_amplitude_m);
+    read_range(f, "frequency_hz", o.flutter_frequency_hz);
+    f.finish();
+  }
+  if (!snow) o.flutter_amplitude_m[0] = o.flutter_amplitude_m[1] = 0;  // rain does not flutter
+  if (r.has("appearance")) {
+    JsonReader a = r.child("appearance");
+    if (!a.is_object()) throw InputError(a.where(), "expected an object");
+    e.appearance.environment_weight = a.get_or<double>("environment_weight", e.appearance.environment_weight);
+    e.appearance.sky_weight = a.get_or<double>("sky_weight", e.appearance.sky_weight);
+    a.finish();
+    for (double w : {e.appearance.environment_weight, e.appearance.sky_weight})
+      if (!(w >= 0 && w <= 10)) throw InputError(a.where(), "appearance weights must be in [0, 10]");
+  }
+  r.finish();
+  o.validate(r.where());
+  return e;
+}
+
+Json particles_to_json(const ParticleEffectSpec& e) {
+  const SpeciesOptions& o = e.species;
+  Json j = {{"rate_mm_h", o.rate_mm_h},
+            {"wind_m_s", {o.wind.mean_m_s.x(), o.wind.mean_m_s.y(), o.wind.mean_m_s.z()}},
+            {"turbulence", {{"rms_m_s", o.wind.turbulence_rms_m_s}, {"length_scale_m", o.wind.length_scale_m},
+                            {"modes", o.wind.modes}}},
+            {"diameter_range_mm", {o.d_min_mm, o.d_max_mm}},
+            {"size_classes", o.size_classes},
+            {"particles_per_cell", o.particles_per_cell},
+            {"opacity", o.opacity},
+            {"appearance", {{"environment_weight", e.appearance.environment_weight},
+                            {"sky_weight", e.appearance.sky_weight}}}};
+  if (o.species == Species::kRain) {
+    j["oblate"] = o.oblate;
+  } else {
+    j["flutter"] = {{"amplitude_m", {o.flutter_amplitude_m[0], o.flutter_amplitude_m[1]}},
+                    {"frequency_hz", {o.flutter_frequency_hz[0], o.flutter_frequency_hz[1]}}};
+  }
+  return j;
+}
+
+}  // namespace
+
+Camera CameraOverrides::apply(Camera c) const {
+  if (exposure_s) c.exposure_s = *exposure_s;
+  if (f_number) c.f_number = *f_number;
+  if (focal_length_mm) c.focal_length_mm = *focal_length_mm;
+  if (focus_distance_m) c.focus_distance_m = *focus_distance_m;
+  return c;
+}
+
+std::string WeatherSpec::weather_name() const {
+  std::string s;
+  auto add = [&](const char* n) { s += (s.empty() ? "" : "+") + std::string(n); };
+  if (rain) add("rain");
+  if (snow) add("snow");
+  if (fog) add("fog");
+  return s.empty() ? "clear" : s;
+}
+
+Json WeatherSpec::to_json() const {
+  Json cam = Json::object();
+  if (camera.exposure_s) cam["exposure_s"] = *camera.exposure_s;
+  if (camera.f_number) cam["f_number"] = *camera.f_number;
+  if (camera.focal_length_mm) cam["focal_length_mm"] = *camera.focal_length_mm;
+  if (camera.focus_distance_m) cam["focus_distance_m"] = *camera.focus_distance_m;
+  Json effects = Json::object();
+  if (rain) effects["rain"] = particles_to_json(*rain);
+  if (snow) effects["snow"] = particles_to_json(*snow);
+  if (fog) {
+    Json f = {{"beta_per_m", fog->beta_per_m}};
+    if (fog->source == FogSpec::Source::kVisibility) f = {{"visibility_m", fog->visibility_m}};
+    if (fog->source == FogSpec::Source::kFromRain) f = {{"from_rain", true}};
+    f["resolved_beta_per_m"] = fog->beta_per_m;
+    f["airlight"] = fog->airlight ? Json{(*fog->airlight)[0], (*fog->airlight)[1], (*fog->airlight)[2]} : Json("auto");
+    effects["fog"] = f;
+  }
+  return {{"seed", seed},
+          {"camera", cam},
+          {"render",
+           {{"streak", render.streak == StreakMode::kAnalytic ? "analytic" : "time_samples"},
+            {"segments", render.segments},
+            {"time_samples", render.time_samples},
+            {"visibility_cutoff", render.visibility_cutoff},
+            {"max_distance_m", render.max_distance_m},
+            {"near_m", render.near_m},
+            {"defocus", render.defocus}}},
+          {"effects", effects}};
+}
+
+WeatherSpec parse_weather_spec(const JsonReader& r) {
+  if (!r.is_object()) throw InputError(r.where(), "expected a weather spec object");
+  WeatherSpec spec;
+  if (r.has("seed")) {
+    const int64_t seed = r.get<int64_t>("seed");
+    if (seed < 0) throw InputError(r.where("seed"), "expected a non-negative integer");
+    spec.seed = uint64_t(seed);
+  } else {
+    r.mark("seed");
+  }
+  if (r.has("camera")) {
+    JsonReader c = r.child("camera");
+    if (!c.is_object()) throw InputError(c.where(), "expected an object");
+    spec.camera.exposure_s = c.get_optional<double>("exposure_s");
+    spec.camera.f_number = c.get_optional<double>("f_number");
+    spec.camera.focal_length_mm = c.get_optional<double>("focal_length_mm");
+    spec.camera.focus_distance_m = c.get_optional<double>("focus_distance_m");
+    c.finish();
+    auto positive = [&](const std::optional<double>& v, const char* key, bool allow_zero) {
+      if (v && !(std::isfinite(*v) && (allow_zero ? *v >= 0 : *v > 0)))
+        throw InputError(c.where(key), allow_zero ? "expected a number >= 0" : "expected a positive number");
+    };
+    positive(spec.camera.exposure_s, "exposure_s", true);
+    positive(spec.camera.f_number, "f_number", false);
+    positive(spec.camera.focal_length_mm, "focal_length_mm", false);
+    positive(spec.camera.focus_distance_m, "focus_distance_m", false);
+    if (spec.camera.exposure_s && *spec.camera.exposure_s > 60)
+      throw InputError(c.where("exposure_s"), "exposure_s above 60 s is not supported");
+  }
+  if (r.has("render")) {
+    JsonReader q = r.child("render");
+    if (!q.is_object()) throw InputError(q.where(), "expected an object");
+    const std::string streak = q.get_or<std::string>("streak", "analytic");
+    if (streak == "analytic") spec.render.streak = StreakMode::kAnalytic;
+    else if (streak == "time_samples") spec.render.streak = StreakMode::kTimeSamples;
+    else throw InputError(q.where("streak"), "expected \"analytic\" or \"time_samples\", got \"" + streak + "\"");
+    spec.render.segments = q.get_or<int>("segments", spec.render.segments);
+    spec.render.time_samples = q.get_or<int>("time_samples", spec.render.time_samples);
+    spec.render.visibility_cutoff = q.get_or<double>("visibility_cutoff", spec.render.visibility_cutoff);
+    spec.render.max_distance_m = q.get_or<double>("max_distance_m", spec.render.max_distance_m);
+    spec.render.near_m = q.get_or<double>("near_m", spec.render.near_m);
+    spec.render.defocus = q.get_or<bool>("defocus", spec.render.defocus);
+    q.finish();
+    spec.render.validate(q.where());
+  }
+  JsonReader effects = r.child("effects");
+  if (!effects.is_object()) throw InputError(effects.where(), "expected an object of effects");
+  if (effects.has("rain")) spec.rain = parse_particles(effects.child("rain"), Species::kRain);
+  if (effects.has("snow")) spec.snow = parse_particles(effects.child("snow"), Species::kSnow);
+  if (effects.has("fog")) {
+    JsonReader f = effects.child("fog");
+    if (!f.is_object()) throw InputError(f.where(), "expected an object");
+    FogSpec fog;
+    const int given = int(f.has("visibility_m")) + int(f.has("beta_per_m")) + int(f.has("from_rain"));
+    if (given != 1)
+      throw InputError(f.where(), "give exactly one of visibility_m, beta_per_m, from_rain");
+    if (f.has("visibility_m")) {
+      fog.source = FogSpec::Source::kVisibility;
+      fog.visibility_m = f.get<double>("visibility_m");
+      if (!(std::isfinite(fog.visibility_m) && fog.visibility_m > 0))
+        throw InputError(f.where("visibility_m"), "expected a positive number of meters");
+      fog.beta_per_m = physics::koschmieder_beta_per_m(fog.visibility_m);
+    } else if (f.has("beta_per_m")) {
+      fog.source = FogSpec::Source::kBeta;
+      fog.beta_per_m = f.get<double>("beta_per_m");
+      if (!(std::isfinite(fog.beta_per_m) && fog.beta_per_m >= 0))
+        throw InputError(f.where("beta_per_m"), "expected a number >= 0");
+    } else {
+      fog.source = FogSpec::Source::kFromRain;
+      if (!f.get<bool>("from_rain")) throw InputError(f.where("from_rain"), "expected true (or leave it out)");
+      if (!spec.rain) throw InputError(f.where("from_rain"), "from_rain needs effects.rain");
+      fog.beta_per_m = physics::rain_extinction_per_m(spec.rain->species.rate_mm_h);
+    }
+    if (f.has("airlight") && !f.value()["airlight"].is_string()) {
+      const Eigen::Vector3d a = read_vec3(f, "airlight", Eigen::Vector3d::Zero());
+      if (!(a.minCoeff() >= 0 && a.maxCoeff() <= 1000))
+        throw InputError(f.where("airlight"), "expected linear RGB in [0, 1000]");
+      fog.airlight = a.cast<float>();
+    } else if (f.has("airlight")) {
+      const std::string s = f.get<std::string>("airlight");
+      if (s != "auto") throw InputError(f.where("airlight"), "expected [r, g, b] or \"auto\"");
+    } else {
+      f.mark("airlight");
+    }
+    f.finish();
+    spec.fog = fog;
+  }
+  // Dispatch point for generator/lens: it parses effects.lens_droplets here.
+  if (effects.has("lens_droplets"))
+    throw InputError(effects.where("lens_droplets"),
+                     "the lens_droplets effect is not available in this build (generator/lens is not "
+                     "wired into the weather pipeline yet)");
+  effects.finish();
+  r.finish();
+  return spec;
+}
+
+}  // namespace weathergs
