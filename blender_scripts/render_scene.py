@@ -520,7 +520,7 @@ def build_pool(b, p, rng):
     y0 = 5.0
     deck_w, deck_l = pw + 16.0, pl + 16.0
     # Deck around the pool: four slabs leave the basin open.
-    b.box("deck", (deck_w, y0 + 2, 0.2), (0, (y0 - 2) / 2 - 2, -0.1), name="deck")
+    b.box("deck", (deck_w, y0 + 8, 0.2), (0, (y0 - 8) / 2, -0.1), name="deck")
     b.box("deck", (deck_w, 6.0, 0.2), (0, y0 + pl + 3.0, -0.1), name="deck")
     side_w = (deck_w - pw) / 2
     for s in (-1, 1):

@@ -76,6 +76,21 @@ std::map<std::string, DbImage> read_image_ids(const ColmapOptions& o, const std:
   return ids;
 }
 
+int64_t count_verified_matches(const ColmapOptions& o, const std::string& db, const std::string& work) {
+  const std::string out = (fs::path(work) / "match_count.txt").string();
+  ProcessOptions popts;
+  popts.stdout_path = out;
+  popts.log_path = (fs::path(work) / "sqlite3.log").string();
+  const ProcessResult r =
+      run_process({o.sqlite3, "-batch", db, "SELECT COALESCE(SUM(rows), 0) FROM two_view_geometries;"}, "sqlite3", popts);
+  if (r.exit_code != 0) throw InputError(db, "sqlite3 could not read two_view_geometries:\n" + tail_of_file(popts.log_path));
+  try {
+    return std::stoll(read_file(out));
+  } catch (const std::logic_error&) {
+    throw InputError(out, "unexpected sqlite3 output");
+  }
+}
+
 // The image of a dataset view in image_dir; views are PNG.
 std::string image_name(const Camera& c) { return c.name + ".png"; }
 
@@ -138,6 +153,11 @@ TriangulationResult triangulate_known_poses(const std::vector<Camera>& cameras, 
   extract_and_match(o, db, image_dir, list_path, {"--ImageReader.camera_params", params.str()}, false, log);
 
   const std::map<std::string, DbImage> ids = read_image_ids(o, db, work_dir);
+  // point_triangulator aborts in bundle adjustment when nothing can be triangulated: say why instead.
+  if (count_verified_matches(o, db, work_dir) == 0)
+    throw InputError(image_dir, "COLMAP found no verified feature matches between the " +
+                                    std::to_string(cameras.size()) +
+                                    " views (images too small, too few views, or textureless); cannot triangulate");
   ColmapModel input;
   std::map<int, bool> camera_ids;
   for (const Camera& c : cameras) {
