@@ -137,10 +137,15 @@ BENCHMARK(BM_LensView)
 void dump(const std::string& dir) {
   std::filesystem::create_directories(dir);
   const Image img = bench_image();
-  for (bool defocus : {false, true}) {
-    const Camera cam = bench_camera(defocus, "000");
+  for (int variant = 0; variant < 3; ++variant) {
+    Camera cam = bench_camera(variant == 1, "000");
+    if (variant == 2) {  // a phone-like lens with the same field of view: f = 4 mm, f/2, focus 3 m
+      cam.f_number = 2.0;
+      cam.focal_length_mm = 4;
+      cam.focus_distance_m = 3;
+    }
     LensViewResult out = LensDropletRenderer(bench_spec(16, false), kSeed, cam).render(img, cam, 0.0);
-    const std::string tag = defocus ? "defocus" : "pinhole";
+    const std::string tag = variant == 0 ? "pinhole" : variant == 1 ? "defocus" : "phone";
     write_image(dir + "/input.png", img);
     write_image(dir + "/output_" + tag + ".png", out.image);
     Image cov = out.coverage;
