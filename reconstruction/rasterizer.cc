@@ -31,16 +31,54 @@ int tile_floor_index(T v, int grid) {
   return c == c ? int(c) : 0;
 }
 
-// Pixel range [lo, hi] whose centers can receive alpha >= 1/255 from a Gaussian: the bounding box
-// of the ellipse d^T conic d <= 2 ln(255 o), widened by one pixel against rounding. Outside it the
-// blend skips every pixel anyway, so restricting the loop does not change the result.
+// exp for the blend weights. float: a branch-free Cody-Waite + degree-6 polynomial (Cephes expf,
+// within 2 ulp on [-87, 0]) that the compiler can vectorize, unlike libm's expf; double (the
+// finite-difference tests): std::exp. Arguments are <= 0 here; below -87 the result is 0-ish (1e-38).
+inline float blend_exp(float x) {
+  x = std::max(x, -87.0f);
+  const float t = x * 1.44269504088896341f;
+  const int n = int(t - 0.5f);  // round to nearest for t <= 0 (truncation toward zero)
+  const float fn = float(n);
+  float r = x - fn * 0.693359375f;
+  r = r - fn * -2.12194440e-4f;
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  const float y = p * r * r + r + 1.0f;
+  int32_t bits = (n + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, 4);
+  return y * scale;
+}
+inline double blend_exp(double x) { return std::exp(x); }
+
+// Half extent (px) of the region where a Gaussian's alpha can reach 1/255: the bounding box of the
+// ellipse d^T conic d <= 2 ln(255 o), widened by one pixel against rounding. Outside it the blend
+// skips every pixel anyway, so restricting the loops to it does not change the result. Negative
+// when the opacity alone is below 1/255 (alpha <= o can never reach it).
 template <typename T>
-void pixel_range(T mean, T cov_diag, T r2, int lo_clip, int hi_clip, int* lo, int* hi) {
-  const T h = std::sqrt(r2 * cov_diag) + T(1);
-  const T a = std::clamp(std::ceil(mean - h - T(0.5)), T(lo_clip), T(hi_clip + 1));
-  const T b = std::clamp(std::floor(mean + h - T(0.5)), T(lo_clip - 1), T(hi_clip));
+T alpha_extent(T opacity, T cov_diag) {
+  if (!(opacity >= T(kAlphaMin))) return T(-1);
+  return std::sqrt(T(2) * std::log(T(255) * opacity) * cov_diag) + T(1);
+}
+
+// Pixel range [lo, hi] of centers (i + 0.5) within `half` of `mean`, clipped to [lo_clip, hi_clip].
+template <typename T>
+void pixel_range(T mean, T half, int lo_clip, int hi_clip, int* lo, int* hi) {
+  const T a = std::clamp(std::ceil(mean - half - T(0.5)), T(lo_clip), T(hi_clip + 1));
+  const T b = std::clamp(std::floor(mean + half - T(0.5)), T(lo_clip - 1), T(hi_clip));
   *lo = int(a);
   *hi = int(b);
+}
+
+// The blend weight of the reference: power of the 2D Gaussian at offset (dx, dy) and
+// alpha = min(0.99, o exp(power)); shared by forward and backward so both see identical values.
+template <typename T>
+inline T splat_power(T ca, T cb, T cc, T dx, T dy) {
+  return T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
 }
 
 template <typename T>
@@ -88,6 +126,12 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
       for (int k = 0; k < 3; ++k) s->color[i * 3 + k] = color[k];
       s->clamped[i] = uint8_t((clamped[0] ? 1 : 0) | (clamped[1] ? 2 : 0) | (clamped[2] ? 4 : 0));
       s->depth[i] = z;
+      T* sp = &s->splat[i * kSplatFloats];
+      sp[0] = pr.mean.x(); sp[1] = pr.mean.y(); sp[2] = conic_a; sp[3] = conic_b; sp[4] = conic_c;
+      sp[5] = s->opacity[i]; sp[6] = color[0]; sp[7] = color[1]; sp[8] = color[2];
+      sp[9] = alpha_extent(sp[5], a);
+      sp[10] = alpha_extent(sp[5], c);
+      sp[11] = T(0);
     }
   });
 }
@@ -144,65 +188,65 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
 template <typename T>
 void render_tiles(const RasterSettings<T>& settings, RasterState<T>* s) {
   const int num_tiles = s->tiles_x * s->tiles_y;
-  const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax), t_min = T(kTransmittanceMin);
   parallel_for(0, num_tiles, [&](int64_t t) {
     const int x0 = int(t % s->tiles_x) * kTileSize, y0 = int(t / s->tiles_x) * kTileSize;
     const int x1 = std::min(s->width, x0 + kTileSize), y1 = std::min(s->height, y0 + kTileSize);
-    const int tw = x1 - x0;
-    T trans[kTilePixels], rgb[kTilePixels * 3];
-    int32_t last[kTilePixels];
-    bool done[kTilePixels];
-    const int npix = tw * (y1 - y0);
-    for (int p = 0; p < npix; ++p) {
+    // Per-pixel state in planar arrays, indexed (y - y0) * 16 + (x - x0), so that the inner loop
+    // over a row is branch-free and vectorizes.
+    alignas(64) T trans[kTilePixels], cr[kTilePixels], cg[kTilePixels], cb_[kTilePixels];
+    alignas(64) int32_t last[kTilePixels], done[kTilePixels];
+    for (int p = 0; p < kTilePixels; ++p) {
       trans[p] = T(1);
-      rgb[p * 3] = rgb[p * 3 + 1] = rgb[p * 3 + 2] = T(0);
+      cr[p] = cg[p] = cb_[p] = T(0);
       last[p] = 0;
-      done[p] = false;
+      done[p] = 0;
     }
-    int remaining = npix;
+    const int64_t npix = int64_t(x1 - x0) * (y1 - y0);
+    int64_t num_done = 0;
     const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
-    for (int64_t k = begin; k < end && remaining > 0; ++k) {
-      const int32_t gi = s->tile_gaussian[k];
-      const T o = s->opacity[gi];
-      if (o < alpha_min) continue;  // alpha <= o can never reach 1/255
-      const T mx = s->mean2d[gi * 2], my = s->mean2d[gi * 2 + 1];
-      const T ca = s->conic[gi * 3], cb = s->conic[gi * 3 + 1], cc = s->conic[gi * 3 + 2];
-      const T r2 = T(2) * std::log(T(255) * o);
+    const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax), t_min = T(kTransmittanceMin);
+    for (int64_t k = begin; k < end && num_done < npix; ++k) {
+      const T* sp = &s->splat[int64_t(s->tile_gaussian[k]) * kSplatFloats];
+      if (sp[9] < T(0)) continue;
+      const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
+      const T r = sp[6], g = sp[7], b = sp[8];
       int px0, px1, py0, py1;
-      pixel_range(mx, s->cov2d[gi * 3], r2, x0, x1 - 1, &px0, &px1);
-      pixel_range(my, s->cov2d[gi * 3 + 2], r2, y0, y1 - 1, &py0, &py1);
-      const T* col = &s->color[gi * 3];
+      pixel_range(mx, sp[9], x0, x1 - 1, &px0, &px1);
+      pixel_range(my, sp[10], y0, y1 - 1, &py0, &py1);
       const int32_t contributor = int32_t(k - begin + 1);
+      int32_t stopped = 0;
       for (int py = py0; py <= py1; ++py) {
         const T dy = my - (T(py) + T(0.5));
+        const int row = (py - y0) * kTileSize - x0;
         for (int px = px0; px <= px1; ++px) {
-          const int p = (py - y0) * tw + (px - x0);
-          if (done[p]) continue;
+          const int p = row + px;
           const T dx = mx - (T(px) + T(0.5));
-          const T power = T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
-          if (power > T(0)) continue;
-          const T alpha = std::min(alpha_max, o * std::exp(power));
-          if (alpha < alpha_min) continue;
-          const T test_t = trans[p] * (T(1) - alpha);
-          if (test_t < t_min) {
-            done[p] = true;
-            --remaining;
-            continue;
-          }
-          const T w = alpha * trans[p];
-          rgb[p * 3] += col[0] * w;
-          rgb[p * 3 + 1] += col[1] * w;
-          rgb[p * 3 + 2] += col[2] * w;
-          trans[p] = test_t;
-          last[p] = contributor;
+          const T power = splat_power(ca, cb, cc, dx, dy);
+          const T alpha = std::min(alpha_max, o * blend_exp(std::min(power, T(0))));
+          const T tp = trans[p];
+          const T test_t = tp * (T(1) - alpha);
+          const bool ok = (power <= T(0)) & (alpha >= alpha_min) & (done[p] == 0);
+          const bool stop = ok & (test_t < t_min);
+          const bool add = ok & !stop;
+          const T w = add ? alpha * tp : T(0);
+          cr[p] += r * w;
+          cg[p] += g * w;
+          cb_[p] += b * w;
+          trans[p] = add ? test_t : tp;
+          last[p] = add ? contributor : last[p];
+          done[p] = stop ? 1 : done[p];
+          stopped += stop ? 1 : 0;
         }
       }
+      num_done += stopped;
     }
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x) {
-        const int p = (y - y0) * tw + (x - x0);
+        const int p = (y - y0) * kTileSize + (x - x0);
         const int64_t pix = int64_t(y) * s->width + x;
-        for (int c = 0; c < 3; ++c) s->image[pix * 3 + c] = rgb[p * 3 + c] + trans[p] * settings.background[c];
+        s->image[pix * 3] = cr[p] + trans[p] * settings.background[0];
+        s->image[pix * 3 + 1] = cg[p] + trans[p] * settings.background[1];
+        s->image[pix * 3 + 2] = cb_[p] + trans[p] * settings.background[2];
         s->final_transmittance[pix] = trans[p];
         s->n_contrib[pix] = last[p];
       }
@@ -232,6 +276,7 @@ void rasterize_forward(const GaussianSet<T>& g, const RasterCamera<T>& camera, c
   s->radius.resize(n);
   s->rect.resize(n * 4);
   s->clamped.resize(n);
+  s->splat.resize(n * kSplatFloats);
   const size_t pixels = size_t(camera.width) * camera.height;
   s->image.resize(pixels * 3);
   s->final_transmittance.resize(pixels);
@@ -253,86 +298,101 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
   s->entry_grad.resize(size_t(s->num_entries()) * kEntryGrads);
   const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax);
   const std::array<T, 3> bg = settings.background;
+  (void)alpha_min;
 
-  // 1. Per tile: replay each pixel's blend back to front, one gradient slot per entry.
+  // 1. Per tile: replay each pixel's blend back to front, one gradient slot per entry. Per-pixel
+  // state is planar and the per-Gaussian sums go to one lane per tile column (summed in column
+  // order afterwards), so the row loop is branch-free and vectorizes.
   parallel_for(0, num_tiles, [&](int64_t t) {
     const int x0 = int(t % s->tiles_x) * kTileSize, y0 = int(t / s->tiles_x) * kTileSize;
     const int x1 = std::min(s->width, x0 + kTileSize), y1 = std::min(s->height, y0 + kTileSize);
-    const int tw = x1 - x0;
-    const int npix = tw * (y1 - y0);
-    T trans[kTilePixels], t_final[kTilePixels], acc[kTilePixels * 3], last_col[kTilePixels * 3];
-    T last_alpha[kTilePixels], dpix[kTilePixels * 3], bg_dot[kTilePixels];
-    int32_t last[kTilePixels];
+    alignas(64) T trans[kTilePixels], t_final[kTilePixels], acc_r[kTilePixels], acc_g[kTilePixels],
+        acc_b[kTilePixels], last_r[kTilePixels], last_g[kTilePixels], last_b[kTilePixels],
+        last_alpha[kTilePixels], d_r[kTilePixels], d_g[kTilePixels], d_b[kTilePixels], bg_dot[kTilePixels];
+    alignas(64) int32_t last[kTilePixels];
     int32_t kmax = 0;
+    for (int p = 0; p < kTilePixels; ++p) {
+      trans[p] = t_final[p] = T(1);
+      acc_r[p] = acc_g[p] = acc_b[p] = last_r[p] = last_g[p] = last_b[p] = last_alpha[p] = T(0);
+      d_r[p] = d_g[p] = d_b[p] = bg_dot[p] = T(0);
+      last[p] = 0;
+    }
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x) {
-        const int p = (y - y0) * tw + (x - x0);
+        const int p = (y - y0) * kTileSize + (x - x0);
         const int64_t pix = int64_t(y) * s->width + x;
         trans[p] = t_final[p] = s->final_transmittance[pix];
         last[p] = s->n_contrib[pix];
         kmax = std::max(kmax, last[p]);
-        last_alpha[p] = T(0);
-        bg_dot[p] = T(0);
-        for (int c = 0; c < 3; ++c) {
-          acc[p * 3 + c] = last_col[p * 3 + c] = T(0);
-          dpix[p * 3 + c] = v_image[pix * 3 + c];
-          bg_dot[p] += bg[c] * dpix[p * 3 + c];
-        }
+        d_r[p] = v_image[pix * 3];
+        d_g[p] = v_image[pix * 3 + 1];
+        d_b[p] = v_image[pix * 3 + 2];
+        bg_dot[p] = bg[0] * d_r[p] + bg[1] * d_g[p] + bg[2] * d_b[p];
       }
-    (void)npix;
     const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
     std::fill(s->entry_grad.begin() + begin * kEntryGrads, s->entry_grad.begin() + end * kEntryGrads, T(0));
+    alignas(64) T lane[kEntryGrads][kTileSize];
     for (int32_t k = kmax - 1; k >= 0; --k) {
-      const int32_t gi = s->tile_gaussian[begin + k];
-      const T o = s->opacity[gi];
-      if (o < alpha_min) continue;
-      const T mx = s->mean2d[gi * 2], my = s->mean2d[gi * 2 + 1];
-      const T ca = s->conic[gi * 3], cb = s->conic[gi * 3 + 1], cc = s->conic[gi * 3 + 2];
-      const T r2 = T(2) * std::log(T(255) * o);
+      const T* sp = &s->splat[int64_t(s->tile_gaussian[begin + k]) * kSplatFloats];
+      if (sp[9] < T(0)) continue;
+      const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
+      const T cr = sp[6], cg = sp[7], cbl = sp[8];
       int px0, px1, py0, py1;
-      pixel_range(mx, s->cov2d[gi * 3], r2, x0, x1 - 1, &px0, &px1);
-      pixel_range(my, s->cov2d[gi * 3 + 2], r2, y0, y1 - 1, &py0, &py1);
-      const T col[3] = {s->color[gi * 3], s->color[gi * 3 + 1], s->color[gi * 3 + 2]};
-      T g_mx = 0, g_my = 0, g_a = 0, g_b = 0, g_c = 0, g_o = 0, g_col[3] = {0, 0, 0};
+      pixel_range(mx, sp[9], x0, x1 - 1, &px0, &px1);
+      pixel_range(my, sp[10], y0, y1 - 1, &py0, &py1);
+      if (px0 > px1 || py0 > py1) continue;
+      for (int j = 0; j < kEntryGrads; ++j)
+        for (int c = 0; c < kTileSize; ++c) lane[j][c] = T(0);
       for (int py = py0; py <= py1; ++py) {
         const T dy = my - (T(py) + T(0.5));
+        const int row = (py - y0) * kTileSize - x0;
         for (int px = px0; px <= px1; ++px) {
-          const int p = (py - y0) * tw + (px - x0);
-          if (k >= last[p]) continue;
+          const int p = row + px;
+          const int l = px - x0;
           const T dx = mx - (T(px) + T(0.5));
-          const T power = T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
-          if (power > T(0)) continue;
-          const T gauss = std::exp(power);
+          const T power = splat_power(ca, cb, cc, dx, dy);
+          const T gauss = blend_exp(std::min(power, T(0)));
           const T alpha_raw = o * gauss;
           const T alpha = std::min(alpha_max, alpha_raw);
-          if (alpha < alpha_min) continue;
-          trans[p] = trans[p] / (T(1) - alpha);
-          const T tp = trans[p];
+          const bool ok = (k < last[p]) & (power <= T(0)) & (alpha >= alpha_min);
+          const T one_minus = T(1) - alpha;
+          const T tp = ok ? trans[p] / one_minus : trans[p];
+          trans[p] = tp;
           const T w = alpha * tp;
-          T v_alpha = 0;
-          for (int c = 0; c < 3; ++c) {
-            T& a = acc[p * 3 + c];
-            a = last_alpha[p] * last_col[p * 3 + c] + (T(1) - last_alpha[p]) * a;
-            last_col[p * 3 + c] = col[c];
-            v_alpha += (col[c] - a) * dpix[p * 3 + c];
-            g_col[c] += w * dpix[p * 3 + c];
-          }
-          v_alpha *= tp;
-          last_alpha[p] = alpha;
-          v_alpha += -t_final[p] / (T(1) - alpha) * bg_dot[p];
-          if (alpha_raw > alpha_max) continue;  // clamped alpha: flat in opacity and position
-          const T v_power = o * v_alpha * gauss;
-          g_mx += v_power * -(ca * dx + cb * dy);
-          g_my += v_power * -(cc * dy + cb * dx);
-          g_a += v_power * T(-0.5) * dx * dx;
-          g_b += v_power * -dx * dy;
-          g_c += v_power * T(-0.5) * dy * dy;
-          g_o += gauss * v_alpha;
+          const T la = last_alpha[p];
+          const T ar = la * last_r[p] + (T(1) - la) * acc_r[p];
+          const T ag = la * last_g[p] + (T(1) - la) * acc_g[p];
+          const T ab = la * last_b[p] + (T(1) - la) * acc_b[p];
+          T v_alpha = ((cr - ar) * d_r[p] + (cg - ag) * d_g[p] + (cbl - ab) * d_b[p]) * tp;
+          v_alpha += -t_final[p] / one_minus * bg_dot[p];
+          acc_r[p] = ok ? ar : acc_r[p];
+          acc_g[p] = ok ? ag : acc_g[p];
+          acc_b[p] = ok ? ab : acc_b[p];
+          last_r[p] = ok ? cr : last_r[p];
+          last_g[p] = ok ? cg : last_g[p];
+          last_b[p] = ok ? cbl : last_b[p];
+          last_alpha[p] = ok ? alpha : la;
+          const T wc = ok ? w : T(0);
+          lane[6][l] += wc * d_r[p];
+          lane[7][l] += wc * d_g[p];
+          lane[8][l] += wc * d_b[p];
+          // A clamped alpha (o G > 0.99) is flat in opacity and position.
+          const T va = (ok & (alpha_raw <= alpha_max)) ? v_alpha : T(0);
+          const T v_power = o * va * gauss;
+          lane[0][l] += v_power * -(ca * dx + cb * dy);
+          lane[1][l] += v_power * -(cc * dy + cb * dx);
+          lane[2][l] += v_power * T(-0.5) * dx * dx;
+          lane[3][l] += v_power * -dx * dy;
+          lane[4][l] += v_power * T(-0.5) * dy * dy;
+          lane[5][l] += gauss * va;
         }
       }
       T* eg = &s->entry_grad[(begin + k) * kEntryGrads];
-      eg[0] = g_mx; eg[1] = g_my; eg[2] = g_a; eg[3] = g_b; eg[4] = g_c; eg[5] = g_o;
-      eg[6] = g_col[0]; eg[7] = g_col[1]; eg[8] = g_col[2];
+      for (int j = 0; j < kEntryGrads; ++j) {
+        T sum = T(0);
+        for (int c = 0; c < kTileSize; ++c) sum += lane[j][c];
+        eg[j] = sum;
+      }
     }
   });
 

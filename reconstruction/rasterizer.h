@@ -26,6 +26,8 @@ struct RasterSettings {
 
 // Everything the forward pass produces and the backward pass consumes. Reused between iterations
 // (vectors keep their capacity).
+constexpr int kSplatFloats = 12;
+
 template <typename T>
 struct RasterState {
   int width = 0, height = 0, tiles_x = 0, tiles_y = 0;
@@ -39,6 +41,9 @@ struct RasterState {
   std::vector<int32_t> radius;   // N, reference radius in px; 0 = not rendered
   std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive)
   std::vector<uint8_t> clamped;  // N, bit c set when colour channel c was clamped at 0
+  // Packed per-Gaussian record read by the tile loops (one cache line): mean x, y, conic a, b, c,
+  // opacity, r, g, b, and the half extents (px) of the region where alpha can reach 1/255.
+  std::vector<T> splat;          // N x kSplatFloats
   std::vector<int64_t> entry_offset;  // N + 1: first entry of each Gaussian in entry_of
   // Per tile.
   std::vector<int64_t> tile_offset;   // tiles + 1

@@ -1,0 +1,90 @@
+// weathergs train: 3D Gaussian Splatting on the CPU (docs/reconstruction.md).
+#include <cstdio>
+
+#include "apps/command.h"
+#include "core/progress.h"
+#include "reconstruction/run.h"
+
+namespace weathergs::cli {
+namespace {
+
+struct TrainArgs {
+  recon::TrainRunOptions run;
+  std::vector<double> background;
+  CLI::App* app = nullptr;
+};
+
+int run_train(TrainArgs& args) {
+  recon::TrainRunOptions o = args.run;
+  if (o.resume) {
+    // Start from what the run was trained with; explicitly given flags must agree (checked below
+    // through the checkpoint) or extend nothing silently.
+    recon::TrainRunOptions stored = recon::read_run_options(o.out);
+    auto given = [&](const char* flag) { return args.app->count(flag) > 0; };
+    if (!given("--data")) o.dataset = stored.dataset;
+    if (!given("--images")) o.images = stored.images;
+    if (!given("--masks")) o.masks = stored.masks;
+    if (!given("--iterations")) o.train.iterations = stored.train.iterations;
+    if (!given("--seed")) o.train.seed = stored.train.seed;
+    if (!given("--background")) o.train.background = stored.train.background;
+    if (!given("--random-init-count")) o.train.random_init_count = stored.train.random_init_count;
+  } else if (o.dataset.empty()) {
+    throw InputError("--data", "required (unless --resume)");
+  }
+  if (!args.background.empty()) {
+    if (args.background.size() != 3) throw InputError("--background", "expected 3 values (R G B in [0, 1])");
+    for (int c = 0; c < 3; ++c) o.train.background[c] = args.background[c];
+  }
+  ProgressBar bar("train", o.train.iterations);
+  double psnr_ema = 0;
+  int reported = 0;
+  auto on_iteration = [&](const recon::IterationStats& st) {
+    if (reported == 0) bar.tick(st.iteration - 1);  // resumed runs start part way
+    ++reported;
+    psnr_ema = reported == 1 ? st.psnr : 0.9 * psnr_ema + 0.1 * st.psnr;
+    if (st.iteration % 10 == 0 || st.iteration == o.train.iterations) {
+      char s[160];
+      std::snprintf(s, sizeof s, "it %d loss %.4f psnr %.2f n %lld", st.iteration, st.loss, psnr_ema,
+                    static_cast<long long>(st.num_gaussians));
+      bar.set_status(s);
+    }
+    bar.tick();
+  };
+  const recon::TrainRunResult r = recon::train_run(o, on_iteration);
+  bar.finish();
+  if (!is_quiet())
+    std::fprintf(stderr, "trained %d iterations in %.1f s: %lld Gaussians, last train PSNR %.2f dB, peak RSS %.0f MiB\n",
+                 r.iterations, r.train_seconds, static_cast<long long>(r.num_gaussians), r.final_psnr, r.peak_rss_mb);
+  return kExitOk;
+}
+
+Command make_train(CLI::App& root) {
+  auto args = std::make_shared<TrainArgs>();
+  CLI::App* sub = root.add_subcommand("train", "Train 3D Gaussian Splatting on a dataset's train split (CPU)");
+  args->app = sub;
+  recon::TrainRunOptions& o = args->run;
+  sub->add_option("--data", o.dataset, "Dataset folder (dataset.json, cameras.json, images/)");
+  sub->add_option("--images", o.images, "Training images: images, clean, or a folder of <view>.png")
+      ->capture_default_str();
+  sub->add_option("--masks", o.masks, "Loss masks: none, lens (masks/lens), or a folder of <view>.png (255 = ignore)")
+      ->capture_default_str();
+  sub->add_option("--iterations", o.train.iterations, "Training iterations")->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--seed", o.train.seed, "Random seed (view order, splits, random init)")->capture_default_str();
+  sub->add_option("--background", args->background, "Background colour R G B in [0, 1] (default 0 0 0)")
+      ->expected(3);
+  sub->add_option("--random-init-count", o.train.random_init_count,
+                  "Gaussians for random initialization when the dataset has no COLMAP points")
+      ->capture_default_str();
+  sub->add_option("--checkpoint-every", o.checkpoint_every, "Iterations between checkpoints (0 = only at the end)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  sub->add_option("--out", o.out, "Run folder (run.json, point_cloud.ply, checkpoint.bin)")->required();
+  sub->add_flag("--resume", o.resume, "Continue the run in --out from its checkpoint");
+  sub->add_flag("--force", o.force, "Start over even if --out already holds a run");
+  return {sub, [args] { return run_train(*args); }};
+}
+
+}  // namespace
+}  // namespace weathergs::cli
+
+WGS_REGISTER_COMMAND(train, weathergs::cli::make_train)

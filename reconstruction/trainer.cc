@@ -1,0 +1,534 @@
+#include "reconstruction/trainer.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "core/rng.h"
+
+namespace weathergs::recon {
+
+namespace {
+
+constexpr int64_t kChunk = 4096;
+// Rng streams of the trainer (the seed is the user's; streams separate the uses).
+constexpr uint64_t kStreamViews = 0x7669657773ull;     // epoch permutations
+constexpr uint64_t kStreamSplit = 0x73706c6974ull;     // split samples, combined with the iteration
+constexpr uint64_t kStreamRandomInit = 0x696e6974ull;  // random initialization
+
+template <typename F>
+void for_each_array(GaussianSet<float>& g, F f) {
+  f(g.position, ParamGroup::kPosition, 3);
+  f(g.log_scale, ParamGroup::kScale, 3);
+  f(g.rotation, ParamGroup::kRotation, 4);
+  f(g.opacity_logit, ParamGroup::kOpacity, 1);
+  f(g.sh, ParamGroup::kShDc, kShFloats);  // DC and rest share the array; see group_of()
+}
+
+ParamGroup group_of(ParamGroup array_group, int64_t index) {
+  if (array_group != ParamGroup::kShDc) return array_group;
+  return index % kShFloats < 3 ? ParamGroup::kShDc : ParamGroup::kShRest;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Options
+
+void TrainOptions::validate(const std::string& where) const {
+  auto fail = [&](const std::string& field, const std::string& value, const std::string& rule) {
+    throw InputError(where, field + " = " + value + ": " + rule);
+  };
+  auto positive = [&](const char* name, double v) {
+    if (!(v > 0) || !std::isfinite(v)) fail(name, std::to_string(v), "must be a positive finite number");
+  };
+  if (iterations < 1) fail("iterations", std::to_string(iterations), "must be >= 1");
+  positive("position_lr_init", position_lr_init);
+  positive("position_lr_final", position_lr_final);
+  positive("feature_lr", feature_lr);
+  positive("opacity_lr", opacity_lr);
+  positive("scaling_lr", scaling_lr);
+  positive("rotation_lr", rotation_lr);
+  positive("adam_eps", adam_eps);
+  positive("percent_dense", percent_dense);
+  positive("densify_grad_threshold", densify_grad_threshold);
+  positive("max_world_size", max_world_size);
+  if (!(lambda_dssim >= 0 && lambda_dssim <= 1)) fail("lambda_dssim", std::to_string(lambda_dssim), "must be in [0, 1]");
+  if (!(adam_beta1 >= 0 && adam_beta1 < 1)) fail("adam_beta1", std::to_string(adam_beta1), "must be in [0, 1)");
+  if (!(adam_beta2 >= 0 && adam_beta2 < 1)) fail("adam_beta2", std::to_string(adam_beta2), "must be in [0, 1)");
+  if (max_sh_degree < 0 || max_sh_degree > kMaxShDegree)
+    fail("max_sh_degree", std::to_string(max_sh_degree), "must be in [0, 3]");
+  if (sh_degree_interval < 1) fail("sh_degree_interval", std::to_string(sh_degree_interval), "must be >= 1");
+  if (densification_interval < 1)
+    fail("densification_interval", std::to_string(densification_interval), "must be >= 1");
+  if (opacity_reset_interval < 1)
+    fail("opacity_reset_interval", std::to_string(opacity_reset_interval), "must be >= 1");
+  if (!(min_opacity >= 0 && min_opacity < 1)) fail("min_opacity", std::to_string(min_opacity), "must be in [0, 1)");
+  for (int c = 0; c < 3; ++c)
+    if (!(background[c] >= 0 && background[c] <= 1))
+      fail("background", std::to_string(background[c]), "each channel must be in [0, 1]");
+  if (random_init_count < 1) fail("random_init_count", std::to_string(random_init_count), "must be >= 1");
+}
+
+Json TrainOptions::to_json() const {
+  return Json{{"iterations", iterations},
+              {"seed", seed},
+              {"lambda_dssim", lambda_dssim},
+              {"position_lr_init", position_lr_init},
+              {"position_lr_final", position_lr_final},
+              {"feature_lr", feature_lr},
+              {"opacity_lr", opacity_lr},
+              {"scaling_lr", scaling_lr},
+              {"rotation_lr", rotation_lr},
+              {"adam_beta1", adam_beta1},
+              {"adam_beta2", adam_beta2},
+              {"adam_eps", adam_eps},
+              {"max_sh_degree", max_sh_degree},
+              {"sh_degree_interval", sh_degree_interval},
+              {"percent_dense", percent_dense},
+              {"densify_from", densify_from},
+              {"densify_until", densify_until},
+              {"densification_interval", densification_interval},
+              {"densify_grad_threshold", densify_grad_threshold},
+              {"opacity_reset_interval", opacity_reset_interval},
+              {"min_opacity", min_opacity},
+              {"max_screen_size_px", max_screen_size_px},
+              {"max_world_size", max_world_size},
+              {"background", {background[0], background[1], background[2]}},
+              {"random_init_count", random_init_count}};
+}
+
+TrainOptions TrainOptions::from_json(const JsonReader& r) {
+  TrainOptions o;
+  o.iterations = r.get_or("iterations", o.iterations);
+  o.seed = r.get_or<uint64_t>("seed", o.seed);
+  o.lambda_dssim = r.get_or("lambda_dssim", o.lambda_dssim);
+  o.position_lr_init = r.get_or("position_lr_init", o.position_lr_init);
+  o.position_lr_final = r.get_or("position_lr_final", o.position_lr_final);
+  o.feature_lr = r.get_or("feature_lr", o.feature_lr);
+  o.opacity_lr = r.get_or("opacity_lr", o.opacity_lr);
+  o.scaling_lr = r.get_or("scaling_lr", o.scaling_lr);
+  o.rotation_lr = r.get_or("rotation_lr", o.rotation_lr);
+  o.adam_beta1 = r.get_or("adam_beta1", o.adam_beta1);
+  o.adam_beta2 = r.get_or("adam_beta2", o.adam_beta2);
+  o.adam_eps = r.get_or("adam_eps", o.adam_eps);
+  o.max_sh_degree = r.get_or("max_sh_degree", o.max_sh_degree);
+  o.sh_degree_interval = r.get_or("sh_degree_interval", o.sh_degree_interval);
+  o.percent_dense = r.get_or("percent_dense", o.percent_dense);
+  o.densify_from = r.get_or("densify_from", o.densify_from);
+  o.densify_until = r.get_or("densify_until", o.densify_until);
+  o.densification_interval = r.get_or("densification_interval", o.densification_interval);
+  o.densify_grad_threshold = r.get_or("densify_grad_threshold", o.densify_grad_threshold);
+  o.opacity_reset_interval = r.get_or("opacity_reset_interval", o.opacity_reset_interval);
+  o.min_opacity = r.get_or("min_opacity", o.min_opacity);
+  o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
+  o.max_world_size = r.get_or("max_world_size", o.max_world_size);
+  if (r.has("background")) {
+    JsonReader b = r.child("background");
+    if (!b.is_array() || b.size() != 3) throw InputError(b.where(), "expected an array of 3 numbers");
+    for (int c = 0; c < 3; ++c) o.background[c] = b.at(c).as<double>();
+  }
+  o.random_init_count = r.get_or("random_init_count", o.random_init_count);
+  r.finish();
+  o.validate(r.where());
+  return o;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene helpers
+
+double scene_extent(const std::vector<Camera>& cameras) {
+  WGS_CHECK(!cameras.empty());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Camera& c : cameras) mean += c.center_world();
+  mean /= double(cameras.size());
+  double max_dist = 0;
+  for (const Camera& c : cameras) max_dist = std::max(max_dist, (c.center_world() - mean).norm());
+  // One camera (or coincident ones) has no spread: fall back to 1 m so learning rates stay sane.
+  return max_dist > 0 ? max_dist * 1.1 : 1.0;
+}
+
+GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed) {
+  WGS_CHECK(!cameras.empty());
+  WGS_CHECK_GT(count, 0);
+  Eigen::Vector3d lo = cameras[0].center_world(), hi = lo;
+  for (const Camera& c : cameras) {
+    lo = lo.cwiseMin(c.center_world());
+    hi = hi.cwiseMax(c.center_world());
+  }
+  // Axes along which the cameras do not spread (a ring at one height, a forward-facing rig) are
+  // widened to the scene extent so the box has volume.
+  const double extent = scene_extent(cameras);
+  for (int k = 0; k < 3; ++k) {
+    if (hi[k] - lo[k] < extent) {
+      const double mid = 0.5 * (lo[k] + hi[k]);
+      lo[k] = mid - 0.5 * extent;
+      hi[k] = mid + 0.5 * extent;
+    }
+  }
+  std::vector<Eigen::Vector3d> pts(count), cols(count);
+  for (int i = 0; i < count; ++i) {
+    Rng rng(seed, kStreamRandomInit, uint64_t(i));
+    for (int k = 0; k < 3; ++k) pts[i][k] = lo[k] + (hi[k] - lo[k]) * rng.uniform_double();
+    for (int k = 0; k < 3; ++k) cols[i][k] = rng.uniform_double();
+  }
+  return init_from_points(pts, cols);
+}
+
+double peak_rss_mb() {
+  struct rusage ru {};
+  getrusage(RUSAGE_SELF, &ru);
+  return double(ru.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+// ---------------------------------------------------------------------------------------------
+// Trainer
+
+Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const TrainOptions& options, double extent)
+    : views_(std::move(views)), options_(options), extent_(extent), g_(std::move(initial)) {
+  options_.validate("train options");
+  WGS_CHECK(!views_.empty());
+  WGS_CHECK(extent_ > 0);
+  for (const TrainView& v : views_) {
+    WGS_CHECK_EQ(v.rgb.size(), size_t(v.camera.width) * v.camera.height * 3);
+    if (!v.invalid.empty()) WGS_CHECK_EQ(v.invalid.size(), size_t(v.camera.width) * v.camera.height);
+  }
+  adam_m_.assign_zero(g_.size());
+  adam_v_.assign_zero(g_.size());
+  grad_accum_.assign(g_.size(), 0.f);
+  grad_count_.assign(g_.size(), 0);
+  max_radii_.assign(g_.size(), 0.f);
+}
+
+int Trainer::view_for_iteration(int iteration) const {
+  const int n = int(views_.size());
+  const int epoch = (iteration - 1) / n, pos = (iteration - 1) % n;
+  std::vector<int> perm(n);
+  std::iota(perm.begin(), perm.end(), 0);
+  Rng rng(options_.seed, kStreamViews, uint64_t(epoch));
+  for (int i = n - 1; i > 0; --i) std::swap(perm[i], perm[rng.uniform_int(uint32_t(i + 1))]);
+  return perm[pos];
+}
+
+double Trainer::position_lr(int iteration) const {
+  // get_expon_lr_func with no delay: log-linear from init to final over the run.
+  const double t = std::clamp(double(iteration) / options_.iterations, 0.0, 1.0);
+  const double lr = std::exp(std::log(options_.position_lr_init) * (1 - t) + std::log(options_.position_lr_final) * t);
+  return lr * extent_;
+}
+
+void Trainer::check_finite_array(const std::vector<float>& a, ParamGroup group, int stride, const char* what) const {
+  // Per chunk the first bad index; the lowest chunk wins, so the message is thread-independent.
+  {
+    const int64_t n = int64_t(a.size());
+    std::vector<int64_t> first(size_t(num_chunks(0, n, kChunk)), -1);
+    parallel_for_chunks(0, n, kChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+      for (int64_t i = lo; i < hi; ++i)
+        if (!std::isfinite(a[i])) { first[c] = i; return; }
+    });
+    for (int64_t f : first)
+      if (f >= 0) {
+        std::ostringstream s;
+        s << "training diverged at iteration " << iteration_ << ": non-finite " << what << " "
+          << to_string(group_of(group, f)) << " (Gaussian " << f / stride << ", value " << a[f] << ")";
+        throw TrainingDiverged(s.str());
+      }
+  }
+}
+
+void Trainer::check_finite_gradients() const {
+  auto check = [&](const std::vector<float>& a, ParamGroup group, int stride, const char* what) {
+    check_finite_array(a, group, stride, what);
+  };
+  GaussianSet<float>& gr = const_cast<GaussianSet<float>&>(grad_);
+  for_each_array(gr, [&](std::vector<float>& a, ParamGroup group, int stride) { check(a, group, stride, "gradient"); });
+}
+
+void Trainer::check_finite_parameters() const {
+  GaussianSet<float>& g = const_cast<GaussianSet<float>&>(g_);
+  for_each_array(g, [&](std::vector<float>& a, ParamGroup group, int stride) {
+    check_finite_array(a, group, stride, "parameter");
+  });
+}
+
+IterationStats Trainer::step() {
+  const int it = ++iteration_;
+  check_finite_parameters();
+  if (it % options_.sh_degree_interval == 0 && sh_degree_ < options_.max_sh_degree) ++sh_degree_;
+  const TrainView& view = views_[view_for_iteration(it)];
+  const RasterCamera<float> cam = RasterCamera<float>::from(view.camera);
+  RasterSettings<float> rs;
+  rs.sh_degree = sh_degree_;
+  for (int c = 0; c < 3; ++c) rs.background[c] = float(options_.background[c]);
+  rasterize_forward(g_, cam, rs, &state_);
+  const LossValue<float> lv = photometric_loss<float>(state_.image, view.rgb, view.invalid.empty() ? nullptr : &view.invalid,
+                                                      view.camera.width, view.camera.height,
+                                                      float(options_.lambda_dssim), &v_image_);
+  if (!std::isfinite(lv.loss)) {
+    std::ostringstream s;
+    s << "training diverged at iteration " << it << ": non-finite loss (" << lv.loss << ") on view '"
+      << view.camera.name << "'";
+    throw TrainingDiverged(s.str());
+  }
+  rasterize_backward(g_, cam, rs, &state_, v_image_, &grad_, &v_ndc_);
+  check_finite_gradients();
+
+  IterationStats stats;
+  stats.iteration = it;
+  stats.loss = lv.loss;
+  stats.psnr = psnr_from_mse(lv.mse);
+  bool skip_adam = false;
+  if (it < options_.densify_until) {
+    const int64_t n = int64_t(g_.size());
+    for (int64_t i = 0; i < n; ++i) {
+      if (state_.radius[i] <= 0) continue;
+      max_radii_[i] = std::max(max_radii_[i], float(state_.radius[i]));
+      grad_accum_[i] += std::hypot(v_ndc_[i * 2], v_ndc_[i * 2 + 1]);
+      grad_count_[i] += 1;
+    }
+    if (it > options_.densify_from && it % options_.densification_interval == 0) {
+      densify_and_prune(it > options_.opacity_reset_interval);
+      stats.densified = true;
+      // The reference replaces every parameter tensor here, leaving them without gradients, so
+      // its optimizer.step() of this iteration updates nothing.
+      skip_adam = true;
+    }
+    if (it % options_.opacity_reset_interval == 0) {
+      reset_opacity();
+      skip_adam = true;
+    }
+  }
+  if (!skip_adam) adam_step();
+  stats.num_gaussians = int64_t(g_.size());
+  return stats;
+}
+
+void Trainer::adam_step() {
+  const double b1 = options_.adam_beta1, b2 = options_.adam_beta2;
+  std::array<float, 6> lr{}, step_size{}, bc2_sqrt{};
+  lr[int(ParamGroup::kPosition)] = float(position_lr(iteration_));
+  lr[int(ParamGroup::kShDc)] = float(options_.feature_lr);
+  lr[int(ParamGroup::kShRest)] = float(options_.feature_lr / 20.0);
+  lr[int(ParamGroup::kOpacity)] = float(options_.opacity_lr);
+  lr[int(ParamGroup::kScale)] = float(options_.scaling_lr);
+  lr[int(ParamGroup::kRotation)] = float(options_.rotation_lr);
+  for (int k = 0; k < 6; ++k) {
+    const int64_t t = ++adam_steps_[k];
+    step_size[k] = float(lr[k] / (1.0 - std::pow(b1, double(t))));
+    bc2_sqrt[k] = float(std::sqrt(1.0 - std::pow(b2, double(t))));
+  }
+  const float fb1 = float(b1), fb2 = float(b2), eps = float(options_.adam_eps);
+  std::vector<std::vector<float>*> params, grads, ms, vs;
+  std::vector<ParamGroup> groups;
+  auto collect = [&](GaussianSet<float>& s, std::vector<std::vector<float>*>* out) {
+    for_each_array(s, [&](std::vector<float>& a, ParamGroup group, int) {
+      out->push_back(&a);
+      if (out == &params) groups.push_back(group);
+    });
+  };
+  collect(g_, &params);
+  collect(grad_, &grads);
+  collect(adam_m_, &ms);
+  collect(adam_v_, &vs);
+  for (size_t a = 0; a < params.size(); ++a) {
+    float* p = params[a]->data();
+    const float* gr = grads[a]->data();
+    float* m = ms[a]->data();
+    float* v = vs[a]->data();
+    const ParamGroup group = groups[a];
+    // Rows of `stride` floats; within an SH row the first 3 (DC) and the other 45 use different rates.
+    const int64_t stride = group == ParamGroup::kShDc ? kShFloats : 1;
+    const int64_t rows = int64_t(params[a]->size()) / stride;
+    parallel_for_chunks(0, rows, kChunk, [&](int64_t, int64_t lo, int64_t hi) {
+      auto update = [&](int64_t i, int k) {
+        m[i] = fb1 * m[i] + (1.f - fb1) * gr[i];
+        v[i] = fb2 * v[i] + (1.f - fb2) * gr[i] * gr[i];
+        p[i] -= step_size[k] * m[i] / (std::sqrt(v[i]) / bc2_sqrt[k] + eps);
+      };
+      if (stride == 1) {
+        const int k = int(group);
+        for (int64_t i = lo; i < hi; ++i) update(i, k);
+      } else {
+        for (int64_t r = lo; r < hi; ++r) {
+          for (int64_t i = r * stride; i < r * stride + 3; ++i) update(i, int(ParamGroup::kShDc));
+          for (int64_t i = r * stride + 3; i < (r + 1) * stride; ++i) update(i, int(ParamGroup::kShRest));
+        }
+      }
+    });
+  }
+}
+
+void Trainer::reset_opacity() {
+  // opacity = min(opacity, 0.01), with fresh Adam moments for the opacity.
+  const float cap = float(inverse_sigmoid(0.01));
+  for (size_t i = 0; i < g_.size(); ++i) {
+    g_.opacity_logit[i] = std::min(g_.opacity_logit[i], cap);
+    adam_m_.opacity_logit[i] = 0.f;
+    adam_v_.opacity_logit[i] = 0.f;
+  }
+}
+
+void Trainer::densify_and_prune(bool prune_large) {
+  const size_t n = g_.size();
+  const float threshold = float(options_.densify_grad_threshold);
+  const float dense = float(options_.percent_dense * extent_);
+  std::vector<char> clone(n, 0), split(n, 0);
+  size_t num_clone = 0, num_split = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const float avg = grad_count_[i] > 0 ? grad_accum_[i] / float(grad_count_[i]) : 0.f;
+    if (!(avg >= threshold)) continue;
+    const float max_scale = std::exp(std::max({g_.log_scale[i * 3], g_.log_scale[i * 3 + 1], g_.log_scale[i * 3 + 2]}));
+    if (max_scale <= dense) clone[i] = 1, ++num_clone;
+    else split[i] = 1, ++num_split;
+  }
+  // Layout after densification, as the reference builds it: [originals, clones, split copy 0 of
+  // every selected, split copy 1 of every selected]; then the split originals are removed.
+  const size_t total = n + num_clone + 2 * num_split;
+  GaussianSet<float> out, m, v;
+  out.resize(total);
+  m.assign_zero(total);
+  v.assign_zero(total);
+  for (size_t i = 0; i < n; ++i) {
+    out.copy_from(g_, i, i);
+    m.copy_from(adam_m_, i, i);
+    v.copy_from(adam_v_, i, i);
+  }
+  size_t w = n;
+  for (size_t i = 0; i < n; ++i)
+    if (clone[i]) out.copy_from(g_, i, w++);
+  const float log_shrink = float(std::log(0.8 * 2));
+  for (int copy = 0; copy < 2; ++copy) {
+    for (size_t i = 0; i < n; ++i) {
+      if (!split[i]) continue;
+      out.copy_from(g_, i, w);
+      Rng rng(options_.seed, kStreamSplit ^ (uint64_t(iteration_) << 8), uint64_t(i) * 2 + copy);
+      Vec3<float> sample;
+      for (int k = 0; k < 3; ++k) sample[k] = float(rng.normal()) * std::exp(g_.log_scale[i * 3 + k]);
+      const Vec4<float> q(g_.rotation[i * 4], g_.rotation[i * 4 + 1], g_.rotation[i * 4 + 2], g_.rotation[i * 4 + 3]);
+      const Vec3<float> offset = quat_to_rotmat(q) * sample;
+      for (int k = 0; k < 3; ++k) {
+        out.position[w * 3 + k] += offset[k];
+        out.log_scale[w * 3 + k] -= log_shrink;
+      }
+      ++w;
+    }
+  }
+  WGS_CHECK_EQ(w, total);
+  std::vector<char> keep(total, 1);
+  for (size_t i = 0; i < n; ++i)
+    if (split[i]) keep[i] = 0;
+  const float min_logit = float(inverse_sigmoid(std::max(options_.min_opacity, 1e-30)));
+  const float max_world = float(options_.max_world_size * extent_);
+  for (size_t i = 0; i < total; ++i) {
+    if (out.opacity_logit[i] < min_logit) keep[i] = 0;
+    // Screen-size pruning (max_radii2D > max_screen_size_px) is not applied: the reference resets
+    // max_radii2D to zero while densifying, just before this test, so it never fires there either.
+    if (prune_large) {
+      const float max_scale = std::exp(std::max({out.log_scale[i * 3], out.log_scale[i * 3 + 1], out.log_scale[i * 3 + 2]}));
+      if (max_scale > max_world) keep[i] = 0;
+    }
+  }
+  out.keep(keep);
+  m.keep(keep);
+  v.keep(keep);
+  g_ = std::move(out);
+  adam_m_ = std::move(m);
+  adam_v_ = std::move(v);
+  grad_accum_.assign(g_.size(), 0.f);
+  grad_count_.assign(g_.size(), 0);
+  max_radii_.assign(g_.size(), 0.f);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Checkpoints: "WGSCKPT1", uint64 JSON length, JSON header, then the float arrays in a fixed order.
+
+namespace {
+constexpr char kCheckpointMagic[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '1'};
+}
+
+void Trainer::save_checkpoint(const std::string& path, double train_seconds) const {
+  Json header{{"iteration", iteration_},
+              {"sh_degree", sh_degree_},
+              {"num_gaussians", g_.size()},
+              {"adam_steps", std::vector<int64_t>(adam_steps_.begin(), adam_steps_.end())},
+              {"extent", extent_},
+              {"train_seconds", train_seconds},
+              {"options", options_.to_json()}};
+  const std::string h = header.dump();
+  std::string out(kCheckpointMagic, 8);
+  const uint64_t len = h.size();
+  out.append(reinterpret_cast<const char*>(&len), 8);
+  out += h;
+  auto put = [&](const std::vector<float>& a) {
+    out.append(reinterpret_cast<const char*>(a.data()), a.size() * sizeof(float));
+  };
+  for (const GaussianSet<float>* s : {&g_, &adam_m_, &adam_v_}) {
+    put(s->position); put(s->log_scale); put(s->rotation); put(s->opacity_logit); put(s->sh);
+  }
+  put(grad_accum_);
+  put(max_radii_);
+  out.append(reinterpret_cast<const char*>(grad_count_.data()), grad_count_.size() * sizeof(int32_t));
+  write_file_atomic(path, out);
+}
+
+double Trainer::load_checkpoint(const std::string& path) {
+  const std::string bytes = read_file(path);
+  if (bytes.size() < 16 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0)
+    throw InputError(path, "not a weathergs training checkpoint (bad magic)");
+  uint64_t len;
+  std::memcpy(&len, bytes.data() + 8, 8);
+  if (len > bytes.size() - 16) throw InputError(path, "truncated checkpoint header");
+  Json hj;
+  try {
+    hj = Json::parse(bytes.substr(16, len));
+  } catch (const std::exception& e) {
+    throw InputError(path, std::string("corrupt checkpoint header: ") + e.what());
+  }
+  JsonReader h(hj, path);
+  const TrainOptions stored = TrainOptions::from_json(h.child("options"));
+  if (stored.to_json() != options_.to_json())
+    throw InputError(path, "checkpoint was written with different training options");
+  const int iteration = h.get<int>("iteration");
+  const int sh_degree = h.get<int>("sh_degree");
+  const size_t n = h.get<size_t>("num_gaussians");
+  JsonReader steps = h.child("adam_steps");
+  if (steps.size() != 6) throw InputError(steps.where(), "expected 6 step counts");
+  std::array<int64_t, 6> adam_steps{};
+  for (int k = 0; k < 6; ++k) adam_steps[k] = steps.at(k).as<int64_t>();
+  const double extent = h.get<double>("extent");
+  const double seconds = h.get<double>("train_seconds");
+  h.finish();
+  const size_t floats_per = 3 + 3 + 4 + 1 + kShFloats;
+  const size_t expected = 16 + len + n * (3 * floats_per + 2) * sizeof(float) + n * sizeof(int32_t);
+  if (bytes.size() != expected)
+    throw InputError(path, "checkpoint size " + std::to_string(bytes.size()) + " bytes, expected " +
+                               std::to_string(expected));
+  size_t off = 16 + len;
+  auto get = [&](std::vector<float>& a, size_t count) {
+    a.resize(count);
+    std::memcpy(a.data(), bytes.data() + off, count * sizeof(float));
+    off += count * sizeof(float);
+  };
+  for (GaussianSet<float>* s : {&g_, &adam_m_, &adam_v_}) {
+    get(s->position, n * 3); get(s->log_scale, n * 3); get(s->rotation, n * 4); get(s->opacity_logit, n);
+    get(s->sh, n * kShFloats);
+  }
+  get(grad_accum_, n);
+  get(max_radii_, n);
+  grad_count_.resize(n);
+  std::memcpy(grad_count_.data(), bytes.data() + off, n * sizeof(int32_t));
+  iteration_ = iteration;
+  sh_degree_ = sh_degree;
+  adam_steps_ = adam_steps;
+  extent_ = extent;
+  return seconds;
+}
+
+}  // namespace weathergs::recon

@@ -1,0 +1,123 @@
+// The 3DGS optimization loop (graphdeco-inria gaussian-splatting train.py): Adam with the reference
+// learning rates, SH degree schedule, adaptive density control, opacity reset, masked loss.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/json_reader.h"
+#include "reconstruction/gaussians.h"
+#include "reconstruction/loss.h"
+#include "reconstruction/rasterizer.h"
+
+namespace weathergs::recon {
+
+// Reference defaults (arguments/__init__.py OptimizationParams); iteration counts are 1-based as in
+// train.py. validate() throws InputError naming the field, its value and the rule.
+struct TrainOptions {
+  int iterations = 30000;
+  uint64_t seed = 0;
+  double lambda_dssim = kLambdaDssim;
+  double position_lr_init = 1.6e-4;   // times the scene extent; log-linear decay over `iterations`
+  double position_lr_final = 1.6e-6;
+  double feature_lr = 2.5e-3;         // SH DC; the higher SH coefficients use feature_lr / 20
+  double opacity_lr = 0.025;
+  double scaling_lr = 5e-3;
+  double rotation_lr = 1e-3;
+  double adam_beta1 = 0.9, adam_beta2 = 0.999, adam_eps = 1e-15;
+  int max_sh_degree = 3;
+  int sh_degree_interval = 1000;      // SH degree + 1 every this many iterations
+  double percent_dense = 0.01;        // clone below / split above this fraction of the extent
+  int densify_from = 500;             // densify when from < iteration < until, every interval
+  int densify_until = 15000;
+  int densification_interval = 100;
+  double densify_grad_threshold = 2e-4;  // mean |dL/d mean2d| in NDC units
+  int opacity_reset_interval = 3000;
+  double min_opacity = 0.005;         // prune below
+  int max_screen_size_px = 20;        // see docs/reconstruction.md: inert as in the reference
+  double max_world_size = 0.1;        // prune scale > this fraction of the extent (after first reset)
+  std::array<double, 3> background = {0, 0, 0};  // sRGB in [0, 1]
+  int random_init_count = 50000;      // Gaussians when the dataset has no COLMAP points
+
+  void validate(const std::string& where) const;
+  Json to_json() const;
+  static TrainOptions from_json(const JsonReader& r);
+};
+
+// One training image: camera, sRGB pixels in [0, 1] (H x W x 3) and an optional mask (H x W,
+// nonzero = masked out; empty = all valid).
+struct TrainView {
+  Camera camera;
+  std::vector<float> rgb;
+  std::vector<uint8_t> invalid;
+};
+
+// Radius of the camera centres around their mean, times 1.1 (getNerfppNorm): the "cameras extent".
+double scene_extent(const std::vector<Camera>& cameras);
+
+// Random initialization inside the cameras' bounds (see docs/reconstruction.md).
+GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed);
+
+// Thrown when a loss or gradient stops being finite; names the parameter, the Gaussian and the step.
+class TrainingDiverged : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct IterationStats {
+  int iteration = 0;
+  double loss = 0, psnr = 0;
+  int64_t num_gaussians = 0;
+  bool densified = false;
+};
+
+class Trainer {
+ public:
+  Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const TrainOptions& options, double extent);
+
+  // Runs iteration() + 1.
+  IterationStats step();
+  int iteration() const { return iteration_; }
+  int sh_degree() const { return sh_degree_; }
+  const GaussianSet<float>& gaussians() const { return g_; }
+  GaussianSet<float>& mutable_gaussians() { return g_; }  // tests inject faults through this
+  const TrainOptions& options() const { return options_; }
+  double extent() const { return extent_; }
+  // Index into views of the image used at a (1-based) iteration: a fresh permutation every epoch.
+  int view_for_iteration(int iteration) const;
+  double position_lr(int iteration) const;
+
+  // Checkpoint: parameters, Adam state, densification statistics and the iteration (binary).
+  void save_checkpoint(const std::string& path, double train_seconds) const;
+  // Restores a checkpoint written with the same options; returns the train seconds stored in it.
+  double load_checkpoint(const std::string& path);
+
+ private:
+  void densify_and_prune(bool prune_large);
+  void reset_opacity();
+  void adam_step();
+  void check_finite_gradients() const;
+  void check_finite_parameters() const;
+  void check_finite_array(const std::vector<float>& a, ParamGroup group, int stride, const char* what) const;
+
+  std::vector<TrainView> views_;
+  TrainOptions options_;
+  double extent_;
+  GaussianSet<float> g_, grad_, adam_m_, adam_v_;
+  std::array<int64_t, 6> adam_steps_{};  // per ParamGroup
+  std::vector<float> grad_accum_, max_radii_;
+  std::vector<int32_t> grad_count_;
+  std::vector<float> v_ndc_, v_image_;
+  RasterState<float> state_;
+  int iteration_ = 0;
+  int sh_degree_ = 0;
+};
+
+// Peak resident set size of this process in MiB (getrusage).
+double peak_rss_mb();
+
+}  // namespace weathergs::recon
