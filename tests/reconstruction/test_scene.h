@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/colmap_model.h"
+#include <filesystem>
 #include "core/dataset.h"
 #include "core/image.h"
 #include "core/rng.h"
@@ -92,6 +94,45 @@ inline Image render_image(const GaussianSet<float>& g, const Camera& cam, int sh
   rs.sh_degree = sh_degree;
   rasterize_forward(g, RasterCamera<float>::from(cam), rs, &st);
   return to_image(st.image, cam.width, cam.height);
+}
+
+// Writes a dataset (dataset.json, cameras.json, images/<view>.png with LLFF splits) rendered from
+// `truth`; with points, also sparse/0 with the true centres (jittered by `jitter_m`) as the SfM cloud.
+inline Dataset write_synthetic_dataset(const std::string& root, const GaussianSet<float>& truth,
+                                       const std::vector<Camera>& cameras, bool with_points,
+                                       double jitter_m = 0.01, uint64_t seed = 1) {
+  namespace fs = std::filesystem;
+  fs::create_directories(fs::path(root) / "images");
+  Dataset d;
+  d.root = root;
+  d.cameras = cameras;
+  std::vector<std::string> names;
+  for (const Camera& c : cameras) {
+    names.push_back(c.name);
+    write_image(d.path("images", c.name), render_image(truth, c));
+  }
+  d.info.name = "synthetic_clear";
+  d.info.scene = "synthetic";
+  d.info.splits = llff_splits(names);
+  d.info.splits_rule = kLlffSplitRule;
+  write_dataset(d);
+  if (with_points) {
+    fs::create_directories(fs::path(root) / "sparse/0");
+    ColmapModel m = colmap_model_from_cameras(cameras);
+    for (size_t i = 0; i < truth.size(); ++i) {
+      Rng rng(seed, 77, i);
+      ColmapPoint3D p;
+      p.id = int64_t(i) + 1;
+      for (int k = 0; k < 3; ++k) {
+        p.xyz[k] = truth.position[i * 3 + k] + jitter_m * rng.normal();
+        p.rgb[k] = std::round(255 * std::clamp(sh0_to_rgb(truth.sh[i * kShFloats + k]), 0.0, 1.0));
+      }
+      p.track = {{1, 0}, {2, 0}};
+      m.points.push_back(p);
+    }
+    write_colmap_text((fs::path(root) / "sparse/0").string(), m);
+  }
+  return d;
 }
 
 }  // namespace weathergs::recon::testing

@@ -1,0 +1,73 @@
+// End to end through the `weathergs` binary: train, checkpoint/resume, render, errors.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "core/json_reader.h"
+#include "reconstruction/gaussians.h"
+#include "tests/core/test_util.h"
+#include "tests/reconstruction/test_scene.h"
+
+namespace weathergs::recon {
+namespace {
+
+namespace fs = std::filesystem;
+
+int run(const std::string& args) {
+  const std::string cmd = std::string(WEATHERGS_BINARY) + " --quiet " + args + " > /dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(CliTest, TrainResumeRender) {
+  weathergs::testing::TempDir dir;
+  const GaussianSet<float> truth = testing::random_gaussians<float>(120, 4, 1.0, 0.12, 0.0);
+  const Dataset d = testing::write_synthetic_dataset(dir / "data", truth, testing::ring_cameras(9, 48, 32, 44, 4.0), true);
+  const std::string data = dir / "data", runp = dir / "run";
+  ASSERT_EQ(run("train --data " + data + " --iterations 40 --checkpoint-every 20 --out " + runp), 0);
+  for (const char* f : {"run.json", "point_cloud.ply", "checkpoint.bin"}) EXPECT_TRUE(fs::exists(fs::path(runp) / f)) << f;
+  JsonReader info = JsonReader::from_file(runp + "/run.json");
+  EXPECT_TRUE(info.get<bool>("complete"));
+  EXPECT_EQ(info.get<int>("iterations"), 40);
+  EXPECT_EQ(info.get<std::string>("initialization"), "colmap:120");
+  const std::string ply40 = read_file(runp + "/point_cloud.ply");
+  // An existing run is not overwritten by accident.
+  EXPECT_EQ(run("train --data " + data + " --iterations 40 --out " + runp), 2);
+  // Resuming with a changed option is refused; --force starts over and reproduces the same model.
+  EXPECT_EQ(run("train --resume --iterations 40 --seed 5 --out " + runp), 2);
+  ASSERT_EQ(run("train --data " + data + " --iterations 40 --checkpoint-every 20 --force --out " + runp), 0);
+  EXPECT_EQ(read_file(runp + "/point_cloud.ply"), ply40);
+  // Resume of a finished run is a no-op that keeps the model.
+  ASSERT_EQ(run("train --resume --out " + runp), 0);
+  EXPECT_EQ(read_file(runp + "/point_cloud.ply"), ply40);
+
+  const std::string renders = dir / "renders";
+  ASSERT_EQ(run("render --model " + runp + " --split test --out " + renders), 0);
+  for (const std::string& v : d.split("test")) {
+    const Image img = read_image(renders + "/" + v + ".png");
+    EXPECT_EQ(img.width, 48);
+    EXPECT_EQ(img.height, 32);
+  }
+  JsonReader ri = JsonReader::from_file(renders + "/info.json");
+  EXPECT_EQ(ri.get<std::string>("method"), "3dgs");
+  EXPECT_EQ(ri.get<int>("iterations"), 40);
+  EXPECT_GT(ri.get<int64_t>("num_gaussians"), 0);
+  EXPECT_GT(ri.get<double>("peak_rss_mb"), 0);
+  EXPECT_GE(ri.get<double>("train_seconds"), 0);
+  EXPECT_GE(ri.get<double>("render_seconds"), 0);
+  ri.finish();
+  EXPECT_EQ(weathergs::testing::count_entries(renders), int(d.split("test").size()) + 1);
+
+  // Bad input: exit code 2 and nothing written.
+  EXPECT_EQ(run("train --data " + dir / "missing" + " --out " + dir / "r2"), 2);
+  EXPECT_EQ(run("train --data " + data + " --masks lens --out " + dir / "r3"), 2);  // no masks/lens
+  EXPECT_EQ(run("render --model " + dir / "missing" + " --out " + dir / "r4"), 2);
+  EXPECT_FALSE(fs::exists(dir / "r4"));
+  EXPECT_EQ(run("render --model " + runp + " --split nope --out " + dir / "r5"), 2);
+  EXPECT_FALSE(fs::exists(dir / "r5"));
+}
+
+}  // namespace
+}  // namespace weathergs::recon
