@@ -1,12 +1,13 @@
 // The weather pipeline as a list of stages. Each stage transforms one view's linear radiance in
 // place; run_weather (generator/weather.h) runs them in order on every view, times them, and records
-// them in dataset.json's generator.stages. Order: fog, rain, snow, then lens effects (a lens stage is
-// appended last: it sees the weathered scene through the droplets on the glass).
+// them in dataset.json's generator.stages. Order: fog, rain, snow, then lens droplets
+// (generator/lens/lens_stage.h, appended last: it sees the weathered scene through the drops).
 #pragma once
 
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "core/camera.h"
@@ -35,6 +36,8 @@ struct WeatherView {
   std::map<std::string, Image> layers;       // float layers: layers/<name>/<view>.exr
   std::map<std::string, std::string> texts;  // text layers: layers/<name>/<view>.csv
   std::map<std::string, int64_t> counters;   // summed over views into generator.stage_counters
+  std::optional<Image> lens_mask;            // set by the lens stage: masks/lens/<view>.png
+  Json lens_drops;                           // set by the lens stage: generator.lens_droplets.views
 };
 
 class WeatherStage {

@@ -12,6 +12,7 @@
 #include "core/image.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "generator/lens/lens_stage.h"
 #include "generator/stages.h"
 
 #include <OpenImageIO/imageio.h>
@@ -32,12 +33,14 @@ double luminance(const Image& img, size_t p) {
 
 // The stages the spec calls for, in pipeline order.
 std::vector<std::unique_ptr<WeatherStage>> make_stages(const WeatherSpec& spec, const Eigen::Vector3f& airlight,
-                                                       bool manifest) {
+                                                       bool manifest, const Camera& reference) {
   std::vector<std::unique_ptr<WeatherStage>> stages;
   if (spec.fog) stages.push_back(std::make_unique<FogStage>(spec.fog->beta_per_m, airlight));
   if (spec.rain) stages.push_back(std::make_unique<ParticleStage>(*spec.rain, spec.render, spec.seed, manifest));
   if (spec.snow) stages.push_back(std::make_unique<ParticleStage>(*spec.snow, spec.render, spec.seed, manifest));
-  // Lens droplets are appended here, after the airborne stages (docs/generator.md).
+  // Lens droplets last: the drops on the glass see the weathered scene (docs/lens_droplets.md).
+  if (spec.lens_droplets)
+    stages.push_back(std::make_unique<lens::LensDropletStage>(*spec.lens_droplets, spec.seed, reference));
   return stages;
 }
 
@@ -133,7 +136,10 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
   }
   const Eigen::Vector3f airlight = spec.fog && spec.fog->airlight ? *spec.fog->airlight : sky;
 
-  const std::vector<std::unique_ptr<WeatherStage>> stages = make_stages(spec, airlight, options.write_manifest);
+  // The lens glass is placed against the first camera in cameras.json order, whatever the view order.
+  if (spec.lens_droplets) spec.lens_droplets = lens::resolve_lens_droplet_spec(*spec.lens_droplets, cameras.front());
+  const std::vector<std::unique_ptr<WeatherStage>> stages =
+      make_stages(spec, airlight, options.write_manifest, cameras.front());
 
   AtomicDirectory out(out_dir);
   const fs::path root(out.path());
@@ -143,6 +149,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
   std::vector<std::vector<double>> seconds(n_views, std::vector<double>(stages.size(), 0.0));
   std::vector<std::map<std::string, int64_t>> counters(n_views);
   std::vector<std::set<std::string>> layer_names(n_views), text_names(n_views);
+  std::vector<Json> lens_drops(n_views);
   ProgressBar progress("weather", int64_t(n_views));
   parallel_for(0, int64_t(n_views), [&](int64_t oi) {
     const size_t i = order[size_t(oi)];
@@ -159,7 +166,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
       throw InputError(depth_path, "depth is " + depth.to_string() + ", expected the camera size");
     const EnvironmentLight env = make_environment_light(clean_img, sky);
     WeatherView view{cam, clean_img, depth, env, clean_img, Image(cam.width, cam.height, 1, ColorSpace::kLinear),
-                     false, FogState{}, {}, {}, {}};
+                     false, FogState{}, {}, {}, {}, std::nullopt, Json()};
     for (size_t s = 0; s < stages.size(); ++s) {
       const auto start = std::chrono::steady_clock::now();
       stages[s]->run(view);
@@ -175,6 +182,11 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
       write_mask((root / "masks" / "particles" / (cam.name + ".png")).string(), view.particle_alpha,
                  float(options.mask_threshold));
       view.layers["particle_alpha"] = view.particle_alpha;
+    }
+    if (view.lens_mask) {
+      fs::create_directories(root / "masks" / "lens");
+      write_mask((root / "masks" / "lens" / (cam.name + ".png")).string(), *view.lens_mask);
+      lens_drops[i] = std::move(view.lens_drops);
     }
     if (options.write_layers)
       for (const auto& [name, img] : view.layers) {
@@ -220,6 +232,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
                              {"float_layers", layers},
                              {"manifests", texts}}}};
   if (spec.fog) block["airlight"] = {airlight[0], airlight[1], airlight[2]};
+  if (spec.lens_droplets) block["lens_droplets"] = {{"views", lens_drops}};  // cameras.json order
 
   Dataset result;
   result.root = root.string();

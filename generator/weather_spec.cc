@@ -128,6 +128,7 @@ std::string WeatherSpec::weather_name() const {
   if (rain) add("rain");
   if (snow) add("snow");
   if (fog) add("fog");
+  if (lens_droplets) add("lens_droplets");
   return s.empty() ? "clear" : s;
 }
 
@@ -148,6 +149,7 @@ Json WeatherSpec::to_json() const {
     f["airlight"] = fog->airlight ? Json{(*fog->airlight)[0], (*fog->airlight)[1], (*fog->airlight)[2]} : Json("auto");
     effects["fog"] = f;
   }
+  if (lens_droplets) effects["lens_droplets"] = lens::lens_droplet_spec_to_json(*lens_droplets);
   return {{"seed", seed},
           {"camera", cam},
           {"render",
@@ -249,10 +251,11 @@ WeatherSpec parse_weather_spec(const JsonReader& r) {
     spec.fog = fog;
   }
   // Dispatch point for generator/lens: it parses effects.lens_droplets here.
-  if (effects.has("lens_droplets"))
-    throw InputError(effects.where("lens_droplets"),
-                     "the lens_droplets effect is not available in this build (generator/lens is not "
-                     "wired into the weather pipeline yet)");
+  if (effects.has("lens_droplets")) {
+    spec.lens_droplets = lens::parse_lens_droplet_spec(effects.child("lens_droplets"));
+  } else {
+    effects.mark("lens_droplets");
+  }
   effects.finish();
   r.finish();
   return spec;

@@ -10,6 +10,7 @@
 
 #include "core/camera.h"
 #include "core/json_reader.h"
+#include "generator/lens/lens_spec.h"
 #include "generator/particles.h"
 #include "generator/render.h"
 
@@ -40,7 +41,9 @@ struct WeatherSpec {
   RenderOptions render;
   std::optional<ParticleEffectSpec> rain, snow;
   std::optional<FogSpec> fog;
-  // Lens droplets (effects.lens_droplets) are parsed by generator/lens; see docs/generator.md.
+  // Lens droplets (effects.lens_droplets), parsed by generator/lens (docs/lens_droplets.md);
+  // run_weather resolves the window pose against the first camera.
+  std::optional<lens::LensDropletSpec> lens_droplets;
 
   // "rain", "snow+fog", ... ("clear" when no effect is given).
   std::string weather_name() const;

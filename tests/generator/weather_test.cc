@@ -258,7 +258,7 @@ TEST(Weather, ErrorsNameTheSpecLocation) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(message({{"effects", {{"lens_droplets", {{"count", 60}}}}}}).find("not available in this build"),
+  EXPECT_NE(message({{"effects", {{"lens_droplets", {{"count", 60}, {"cuont", 1}}}}}}).find("/effects/lens_droplets"),
             std::string::npos);
   EXPECT_NE(message({{"effects", {{"rain", {{"rate_mm_h", 5}, {"rate", 3}}}}}}).find("spec.json:/effects/rain"),
             std::string::npos);

@@ -1,0 +1,16 @@
+#include "generator/lens/lens_stage.h"
+
+namespace weathergs::lens {
+
+void LensDropletStage::run(WeatherView& view) const {
+  LensViewResult r = renderer_.render(view.radiance, view.camera, view.camera.time_s);
+  view.radiance = std::move(r.image);
+  view.layers["lens_coverage"] = std::move(r.coverage);
+  view.lens_mask = std::move(r.mask);
+  view.lens_drops = std::move(r.drops);
+  view.counters["lens_camera_rays"] += r.camera_rays;
+  view.counters["lens_water_rays"] += r.water_rays;
+  view.counters["lens_embree_rays"] += r.embree_rays;
+}
+
+}  // namespace weathergs::lens
