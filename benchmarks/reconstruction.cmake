@@ -2,3 +2,6 @@
 add_executable(bench_reconstruction ${CMAKE_CURRENT_LIST_DIR}/reconstruction_iteration.cc)
 target_link_libraries(bench_reconstruction PRIVATE weathergs_reconstruction benchmark::benchmark)
 target_include_directories(bench_reconstruction PRIVATE ${PROJECT_SOURCE_DIR})
+add_executable(bench_reconstruction_make_dataset ${CMAKE_CURRENT_LIST_DIR}/reconstruction_make_dataset.cc)
+target_link_libraries(bench_reconstruction_make_dataset PRIVATE weathergs_reconstruction)
+target_include_directories(bench_reconstruction_make_dataset PRIVATE ${PROJECT_SOURCE_DIR})

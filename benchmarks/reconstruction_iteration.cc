@@ -4,6 +4,9 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdlib>
+
+#include "core/parallel.h"
 
 #include "core/rng.h"
 #include "reconstruction/loss.h"
@@ -113,4 +116,13 @@ BENCHMARK(BM_Loss)->Args({300, 200, 0})->Args({600, 400, 0})->Unit(benchmark::kM
 }  // namespace
 }  // namespace weathergs::recon
 
-BENCHMARK_MAIN();
+// WEATHERGS_THREADS caps the worker threads (0 or unset = all cores). With 1 thread the CPU column is
+// the single-thread cost even on a loaded machine.
+int main(int argc, char** argv) {
+  const char* t = std::getenv("WEATHERGS_THREADS");
+  weathergs::set_num_threads(t ? std::atoi(t) : 0);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

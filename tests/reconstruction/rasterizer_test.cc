@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/parallel.h"
+#include "core/rng.h"
 #include "reconstruction/loss.h"
 #include "reconstruction/rasterizer.h"
 #include "tests/reconstruction/test_scene.h"
@@ -79,6 +80,43 @@ TEST(RasterizerTest, FloatMatchesDouble) {
   double max_err = 0;
   for (size_t i = 0; i < sd.image.size(); ++i) max_err = std::max(max_err, std::abs(sd.image[i] - double(sf.image[i])));
   EXPECT_LT(max_err, kFloatTol);
+}
+
+// The float backward (vectorized tile kernel, fast exp) against the double backward (scalar kernel).
+TEST(RasterizerTest, FloatGradientsMatchDouble) {
+  const Camera c = front_camera(64, 48);
+  const GaussianSet<double> gd = random_gaussians<double>(300, 23, 1.0, 0.08, 0.2);
+  const GaussianSet<float> gf = gd.cast<float>();
+  RasterState<double> sd;
+  RasterState<float> sf;
+  const RasterCamera<double> cd = RasterCamera<double>::from(c);
+  const RasterCamera<float> cf = RasterCamera<float>::from(c);
+  rasterize_forward(gd, cd, RasterSettings<double>{}, &sd);
+  rasterize_forward(gf, cf, RasterSettings<float>{}, &sf);
+  std::vector<double> wd(sd.image.size());
+  Rng rng(3, 0, 0);
+  for (double& w : wd) w = rng.uniform_double() - 0.5;
+  const std::vector<float> wf(wd.begin(), wd.end());
+  GaussianSet<double> grad_d;
+  GaussianSet<float> grad_f;
+  rasterize_backward(gd, cd, RasterSettings<double>{}, &sd, wd, &grad_d);
+  rasterize_backward(gf, cf, RasterSettings<float>{}, &sf, wf, &grad_f);
+  // Relative to the largest gradient of each kind: float sums of a few thousand terms.
+  constexpr double kFloatGradTol = 2e-3;
+  auto compare = [&](const std::vector<double>& a, const std::vector<float>& b, const char* name) {
+    double scale = 0, err = 0;
+    for (size_t i = 0; i < a.size(); ++i) {
+      scale = std::max(scale, std::abs(a[i]));
+      err = std::max(err, std::abs(a[i] - double(b[i])));
+    }
+    EXPECT_GT(scale, 0) << name;
+    EXPECT_LT(err, kFloatGradTol * scale) << name;
+  };
+  compare(grad_d.position, grad_f.position, "position");
+  compare(grad_d.log_scale, grad_f.log_scale, "log_scale");
+  compare(grad_d.rotation, grad_f.rotation, "rotation");
+  compare(grad_d.opacity_logit, grad_f.opacity_logit, "opacity");
+  compare(grad_d.sh, grad_f.sh, "sh");
 }
 
 // Forward, loss and backward on a scene, asserting every output is finite.
