@@ -27,11 +27,6 @@ uint64_t cell_key(const CellIndex& c) {
   return splitmix64(splitmix64(splitmix64(uint64_t(c.x())) ^ uint64_t(c.y())) ^ uint64_t(c.z()));
 }
 
-double wrap_into(double x, double s, double* shift) {
-  const double n = std::floor(x / s);
-  *shift = n * s;
-  return x - n * s;
-}
 }  // namespace
 
 const char* to_string(Species s) { return s == Species::kRain ? "rain" : "snow"; }
@@ -157,34 +152,47 @@ void ParticleField::cell_particles(int k, const CellIndex& cell, std::vector<Par
 }
 
 ParticleState ParticleField::state(const Particle& p, double t, double t_ref) const {
+  ParticleState s;
+  states(p, &t, 1, t_ref, &s);
+  return s;
+}
+
+void ParticleField::states(const Particle& p, const double* t, int n, double t_ref, ParticleState* out) const {
   const SizeClass& c = classes_[size_t(p.id.size_class)];
   const Eigen::Vector3d origin = p.id.cell.cast<double>() * c.cell_m;
   const Eigen::Vector3d u_frame = frame_velocity(p.id.size_class);
-  // Motion relative to the frame: own fall speed, gusts, flutter.
-  auto relative = [&](double time, Eigen::Vector3d* vel) {
-    Eigen::Vector3d disp, gust_v;
-    wind_.particle_response(origin + p.q0, p.fall_m_s, p.tau_s, time, &disp, &gust_v);
-    const double dfall = c.frame_fall_m_s - p.fall_m_s;
-    disp.z() += dfall * time;
-    gust_v.z() += dfall;
-    if (p.flutter_amp_m > 0) {
-      const double ca = std::cos(p.flutter_angle), sa = std::sin(p.flutter_angle);
-      const double ph = p.flutter_omega * time + p.flutter_phase;
-      const double x = p.flutter_amp_m * std::cos(ph), y = p.flutter_amp_m * p.flutter_b * std::sin(ph);
-      const double vx = -p.flutter_amp_m * p.flutter_omega * std::sin(ph);
-      const double vy = p.flutter_amp_m * p.flutter_b * p.flutter_omega * std::cos(ph);
-      disp += Eigen::Vector3d(ca * x - sa * y, sa * x + ca * y, 0);
-      gust_v += Eigen::Vector3d(ca * vx - sa * vy, sa * vx + ca * vy, 0);
+  const double dfall = c.frame_fall_m_s - p.fall_m_s;
+  // Motion relative to the frame at t_ref and the n times: own fall speed, gusts, flutter.
+  constexpr int kBatch = 16;
+  double times[kBatch + 1];
+  Eigen::Vector3d disp[kBatch + 1], vel[kBatch + 1];
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+  for (int first = 0; first < n; first += kBatch) {
+    const int m = std::min(kBatch, n - first);
+    times[0] = t_ref;
+    for (int i = 0; i < m; ++i) times[i + 1] = t[first + i];
+    wind_.particle_response(origin + p.q0, p.fall_m_s, p.tau_s, times, m + 1, disp, vel);
+    for (int i = 0; i <= m; ++i) {
+      disp[i].z() += dfall * times[i];
+      vel[i].z() += dfall;
+      if (p.flutter_amp_m > 0) {
+        const double ca = std::cos(p.flutter_angle), sa = std::sin(p.flutter_angle);
+        const double ph = p.flutter_omega * times[i] + p.flutter_phase;
+        const double x = p.flutter_amp_m * std::cos(ph), y = p.flutter_amp_m * p.flutter_b * std::sin(ph);
+        const double vx = -p.flutter_amp_m * p.flutter_omega * std::sin(ph);
+        const double vy = p.flutter_amp_m * p.flutter_b * p.flutter_omega * std::cos(ph);
+        disp[i] += Eigen::Vector3d(ca * x - sa * y, sa * x + ca * y, 0);
+        vel[i] += Eigen::Vector3d(ca * vx - sa * vy, sa * vx + ca * vy, 0);
+      }
     }
-    if (vel) *vel = gust_v;
-    return disp;
-  };
-  Eigen::Vector3d shift;
-  const Eigen::Vector3d q_ref = p.q0 + relative(t_ref, nullptr);
-  for (int i = 0; i < 3; ++i) wrap_into(q_ref[i], c.cell_m, &shift[i]);
-  Eigen::Vector3d v_rel;
-  const Eigen::Vector3d q = p.q0 + relative(t, &v_rel) - shift;
-  return {origin + u_frame * t + q, u_frame + v_rel};
+    // The wrap into the cell is chosen at t_ref: the path is continuous over the given times.
+    const Eigen::Vector3d q_ref = p.q0 + disp[0];
+    for (int a = 0; a < 3; ++a) shift[a] = std::floor(q_ref[a] / c.cell_m) * c.cell_m;
+    for (int i = 0; i < m; ++i) {
+      out[first + i].p_world = origin + u_frame * times[i + 1] + p.q0 + disp[i + 1] - shift;
+      out[first + i].v_world = u_frame + vel[i + 1];
+    }
+  }
 }
 
 }  // namespace weathergs

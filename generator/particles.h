@@ -93,6 +93,8 @@ class ParticleField {
   // Position and velocity at time t_s, wrapped into the particle's cell at time t_ref_s: for a fixed
   // t_ref the path is continuous in t (used over one exposure); state(p, t, t) is canonical.
   ParticleState state(const Particle& p, double t_s, double t_ref_s) const;
+  // state() at n times with one t_ref (cheaper: the gust phases are shared).
+  void states(const Particle& p, const double* t_s, int n, double t_ref_s, ParticleState* out) const;
 
  private:
   SpeciesOptions options_;

@@ -87,16 +87,25 @@ void raster_disk(const SplatPrimitive& pr, int width, int height, int row0, int 
   // Bounding box of the part of the capsule that can touch the image.
   double ua = 0, ub = 1;
   if (!clip_segment(pr.x0, pr.y0, dx, dy, -r, width + r, row0 - r, row1 + 1 + r, &ua, &ub)) return;
-  const double xa = pr.x0 + ua * dx, xb = pr.x0 + ub * dx, ya = pr.y0 + ua * dy, yb = pr.y0 + ub * dy;
-  const int px0 = std::max(0, int(std::floor(std::min(xa, xb) - r)));
-  const int px1 = std::min(width - 1, int(std::floor(std::max(xa, xb) + r)));
+  const double ya = pr.y0 + ua * dy, yb = pr.y0 + ub * dy;
   const int py0 = std::max(row0, int(std::floor(std::min(ya, yb) - r)));
   const int py1 = std::min({row1, height - 1, int(std::floor(std::max(ya, yb) + r))});
-  // Points per pixel side: the disk's edge is resolved at ~1/32 of its radius (lattice-counting
-  // error of the covered area ~1% and below).
-  const int s = std::clamp(int(std::ceil(32.0 / r)), 1, 16);
+  // Points per pixel side: the disk's edge is resolved at ~1/24 of its radius (lattice-counting
+  // error of the covered area ~2% at R = 1 px, below 1% from R = 2 px).
+  const int s = std::clamp(int(std::ceil(24.0 / r)), 1, 8);
   const double scale = double(pr.a0) * pr.weight / (s * s);
   for (int y = py0; y <= py1; ++y) {
+    // The part of the segment whose capsule reaches this row: a tight x range for diagonal streaks.
+    double u0 = ua, u1 = ub;
+    if (dy != 0) {
+      const double a0 = (y - r - pr.y0) / dy, a1 = (y + 1 + r - pr.y0) / dy;
+      u0 = std::max(ua, std::min(a0, a1));
+      u1 = std::min(ub, std::max(a0, a1));
+      if (u0 > u1) continue;
+    }
+    const double xr0 = pr.x0 + u0 * dx, xr1 = pr.x0 + u1 * dx;
+    const int px0 = std::max(0, int(std::floor(std::min(xr0, xr1) - r)));
+    const int px1 = std::min(width - 1, int(std::floor(std::max(xr0, xr1) + r)));
     for (int x = px0; x <= px1; ++x) {
       const double zd = depth.at(x, y);
       double sum = 0;

@@ -8,7 +8,7 @@
 //  * point (R < 0.5 px): mass m = a0 pi R^2 spread over the pixels the segment crosses in proportion
 //    to the exact length of the segment inside each pixel (analytic segment-pixel overlap);
 //  * disk (R >= 0.5 px): the exact time fraction during which each point is inside the moving disk
-//    (segment-circle chord), averaged over S x S points per pixel (S = ceil(32 / R) clamped to 1..16).
+//    (segment-circle chord), averaged over S x S points per pixel (S = ceil(24 / R) clamped to 1..8).
 // Both conserve the mass a0 pi R^2. Alphas of one particle are summed per pixel, then particles are
 // composited order-independently: A = 1 - prod(1 - alpha_i), radiance sum(alpha_i L_i) / sum(alpha_i)
 // (exact when particles do not overlap in time and space, which a pixel's time-averaged coverage
@@ -34,7 +34,7 @@ struct RenderOptions {
   int time_samples = 16;       // kTimeSamples: dots at the midpoints of N equal time slices
   // A particle is drawn only if the peak alpha it can reach in any pixel is at least this; also
   // sets how far each size class is populated (see visibility_distance_m).
-  double visibility_cutoff = 0.002;
+  double visibility_cutoff = 0.01;
   double max_distance_m = 50;  // hard cap on the populated distance (m)
   double near_m = 0.05;        // paths are clipped to camera z >= near_m (closer is a lens droplet)
   bool defocus = true;         // thin-lens blur where the camera has f_number/focal/focus

@@ -15,6 +15,9 @@ constexpr int64_t kCellsPerChunk = 64;
 // Refuse views that would enumerate more cells than this (memory and time stay bounded; raise
 // render.visibility_cutoff or lower render.max_distance_m).
 constexpr int64_t kMaxCellsPerClass = 20'000'000;
+// Gusts are bounded at this many standard deviations per component (3: a particle faster than that
+// relative to its frame at a frustum border may be missed, probability ~1e-3 per such particle).
+constexpr double kGustSigmas = 3.0;
 }  // namespace
 
 const char* const kManifestHeader =
@@ -49,6 +52,14 @@ ParticleStage::ParticleStage(const ParticleEffectSpec& effect, const RenderOptio
                              bool manifest)
     : field_(effect.species, seed), appearance_(effect.appearance), render_(render), manifest_(manifest) {}
 
+double relative_speed_bound_m_s(const ParticleField& field, int k) {
+  const SizeClass& cls = field.classes()[size_t(k)];
+  const SpeciesOptions& o = field.options();
+  return std::abs(o.fall_speed_m_s(cls.hi_mm) - o.fall_speed_m_s(cls.lo_mm)) +
+         kGustSigmas * std::sqrt(3.0) * o.wind.turbulence_rms_m_s +
+         o.flutter_amplitude_m[1] * 2 * M_PI * o.flutter_frequency_hz[1];
+}
+
 std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Camera& cam, double near,
                                      double distance) {
   const SizeClass& cls = field.classes()[size_t(k)];
@@ -56,7 +67,7 @@ std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Ca
   const double t0 = cam.time_s, exposure = cam.exposure_s;
   const Eigen::Vector3d u = field.frame_velocity(k);
   // Slack: motion relative to the frame over the exposure, plus the particle's own size.
-  const double margin = cls.max_relative_speed_m_s * exposure + 2 * cls.max_visual_radius_m + 1e-3;
+  const double margin = relative_speed_bound_m_s(field, k) * exposure + 2 * cls.max_visual_radius_m + 1e-3;
   // Frustum planes in camera space, inward unit normals: n . p_camera + offset >= 0.
   struct Plane {
     Eigen::Vector3d n;
@@ -121,6 +132,45 @@ std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Ca
   return cells;
 }
 
+double population_distance_m(const ParticleField& field, int k, const RenderView& view, double opacity,
+                             const RenderOptions& options) {
+  const SizeClass& cls = field.classes()[size_t(k)];
+  const Camera& cam = view.camera;
+  const double f = view.f_px(), r = cls.max_visual_radius_m, a0 = opacity;
+  const double still = visibility_distance_m(f, r, a0, options);
+  const double exposure = cam.exposure_s;
+  if (!(exposure > 0)) return still;
+  // Slowest image motion over the frustum: |U x d| over a 9 x 9 grid of pixel directions, 0 if the
+  // frame velocity (or its opposite) points into the image; minus a 3-sigma bound of the particles'
+  // own motion relative to the frame (fall-speed spread, gusts, flutter).
+  const Eigen::Vector3d u = field.frame_velocity(k);
+  double v_perp = 1e300;
+  if (u.norm() > 0) {
+    const Eigen::Vector3d uc = cam.rotation() * u;
+    for (const Eigen::Vector3d& dir : {uc, Eigen::Vector3d(-uc)})
+      if (dir.z() > 0) {
+        const Eigen::Vector2d px = cam.project_camera(dir);
+        if (px.x() >= 0 && px.x() <= cam.width && px.y() >= 0 && px.y() <= cam.height) v_perp = 0;
+      }
+    for (int i = 0; i <= 8; ++i)
+      for (int j = 0; j <= 8; ++j) {
+        const Eigen::Vector3d d = cam.ray_direction_world(Eigen::Vector2d(cam.width * i / 8.0, cam.height * j / 8.0));
+        v_perp = std::min(v_perp, u.cross(d).norm());
+      }
+  } else {
+    v_perp = 0;
+  }
+  const double own = relative_speed_bound_m_s(field, k);
+  // 0.9: the grid may miss the exact minimum between its points.
+  const double vp = 0.9 * v_perp - own;
+  if (!(vp > 0)) return still;
+  // Point kernel: peak <= 1.5 m / L with m = pi a0 (f r / z)^2 and L = f vp T / z.
+  const double d_point = 1.5 * M_PI * f * r * r * a0 / (vp * exposure * options.visibility_cutoff);
+  // Disk kernel (R >= 0.5 px, z <= 2 f r): peak <= a0 2R / L = 2 a0 r / (vp T), for any z.
+  const double d_disk = 2 * a0 * r / (vp * exposure) >= options.visibility_cutoff ? 2 * f * r : 0.0;
+  return std::min(still, std::max(d_point, d_disk));
+}
+
 void ParticleStage::run(WeatherView& v) const {
   const Camera& cam = v.camera;
   const std::string species = to_string(field_.options().species);
@@ -137,7 +187,7 @@ void ParticleStage::run(WeatherView& v) const {
   };
   std::vector<Item> items;
   for (int k = 0; k < int(field_.classes().size()); ++k) {
-    const double d = visibility_distance_m(view.f_px(), field_.classes()[size_t(k)].max_visual_radius_m, opacity, render_);
+    const double d = population_distance_m(field_, k, view, opacity, render_);
     if (!(d > render_.near_m)) continue;
     for (const CellIndex& c : visible_cells(field_, k, cam, render_.near_m, d)) items.push_back({k, c});
   }
@@ -148,13 +198,15 @@ void ParticleStage::run(WeatherView& v) const {
   parallel_for_chunks(0, int64_t(items.size()), kCellsPerChunk, [&](int64_t chunk, int64_t lo, int64_t hi) {
     std::vector<Particle> cell;
     std::vector<Eigen::Vector3d> pos(times.size());
+    std::vector<ParticleState> st(times.size());
     SplatList& out = chunk_splats[size_t(chunk)];
     for (int64_t i = lo; i < hi; ++i) {
       cell.clear();
       field_.cell_particles(items[size_t(i)].k, items[size_t(i)].cell, &cell);
       chunk_generated[size_t(chunk)] += int64_t(cell.size());
       for (const Particle& p : cell) {
-        for (size_t j = 0; j < times.size(); ++j) pos[j] = field_.state(p, times[j], cam.time_s).p_world;
+        field_.states(p, times.data(), int(times.size()), cam.time_s, st.data());
+        for (size_t j = 0; j < times.size(); ++j) pos[j] = st[j].p_world;
         const int source = int(chunk_particles[size_t(chunk)].size());
         if (add_splat(view, render_, pos.data(), int(pos.size()), p.visual_radius_m, opacity, source, &out))
           chunk_particles[size_t(chunk)].push_back(p);

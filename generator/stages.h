@@ -82,6 +82,16 @@ class ParticleStage : public WeatherStage {
 std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Camera& camera,
                                      double near_m, double distance_m);
 
+// Bound on a particle's speed relative to its class frame: fall-speed spread of the class, gusts
+// at 3 standard deviations per component, flutter.
+double relative_speed_bound_m_s(const ParticleField& field, int k);
+
+// How far class k is populated in a view: visibility_distance_m (a still particle), shortened by
+// motion blur where every particle of the class must move across the image during the exposure
+// (its streak spreads its mass below the cutoff beyond this distance; docs/generator.md).
+double population_distance_m(const ParticleField& field, int k, const RenderView& view, double opacity,
+                             const RenderOptions& options);
+
 // The manifest's CSV header (one row per drawn particle).
 extern const char* const kManifestHeader;
 

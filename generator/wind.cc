@@ -17,8 +17,6 @@ Eigen::Vector3d uniform_unit_vector(Rng& rng) {
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
-// sin(x)/x, stable at 0.
-double sinc(double x) { return std::abs(x) < 1e-8 ? 1.0 - x * x / 6.0 : std::sin(x) / x; }
 }  // namespace
 
 void WindOptions::validate(const std::string& where) const {
@@ -72,19 +70,34 @@ Eigen::Vector3d WindField::air_velocity(const Eigen::Vector3d& p, double t) cons
 
 void WindField::particle_response(const Eigen::Vector3d& x_ref, double fall, double tau, double t,
                                   Eigen::Vector3d* disp, Eigen::Vector3d* vel) const {
-  disp->setZero();
-  vel->setZero();
+  particle_response(x_ref, fall, tau, &t, 1, disp, vel);
+}
+
+void WindField::particle_response(const Eigen::Vector3d& x_ref, double fall, double tau, const double* t, int n,
+                                  Eigen::Vector3d* disp, Eigen::Vector3d* vel) const {
+  for (int i = 0; i < n; ++i) disp[i].setZero(), vel[i].setZero();
   for (const Mode& m : modes_) {
     // Phase along the undisturbed path: k.(x_ref - fall z t) - omega t + phase = theta0 + Omega t.
     const double theta0 = m.k.dot(x_ref) + m.phase;
     const double omega = -(m.k.z() * fall + m.omega);
-    // First-order low-pass of a sinusoid: gain 1/sqrt(1 + (Omega tau)^2), lag atan(Omega tau).
-    const double gain = 1.0 / std::sqrt(1.0 + omega * omega * tau * tau);
-    const double lag = std::atan(omega * tau);
-    const double th = theta0 - lag;
-    *vel += gain * m.a * std::sin(th + omega * t);
-    // Int_0^t sin(th + Omega s) ds = t sinc(Omega t / 2) sin(th + Omega t / 2).
-    *disp += gain * m.a * (t * sinc(0.5 * omega * t) * std::sin(th + 0.5 * omega * t));
+    // First-order low-pass of the sinusoid Im(a e^{i(theta0 + Omega t)}): multiply by
+    // c = 1 / (1 + i Omega tau) (gain 1/sqrt(1 + (Omega tau)^2), lag atan(Omega tau)).
+    const double ot = omega * tau, inv = 1.0 / (1.0 + ot * ot);
+    const double cr = inv, ci = -ot * inv;
+    const double s0 = std::sin(theta0), c0 = std::cos(theta0);
+    // e0 = c e^{i theta0}
+    const double er = cr * c0 - ci * s0, ei = cr * s0 + ci * c0;
+    for (int i = 0; i < n; ++i) {
+      const double h = 0.5 * omega * t[i];
+      const double sh = std::sin(h), ch = std::cos(h);
+      // e^{i Omega t} = (e^{i h})^2
+      const double c2 = ch * ch - sh * sh, s2 = 2 * sh * ch;
+      // velocity: Im(e0 e^{i Omega t})
+      vel[i] += m.a * (er * s2 + ei * c2);
+      // displacement: Im(e0 (e^{i Omega t} - 1) / (i Omega)) = t sinc(h) Im(e0 e^{i h})
+      const double sinc_h = std::abs(h) < 1e-8 ? 1.0 - h * h / 6.0 : sh / h;
+      disp[i] += m.a * (t[i] * sinc_h * (er * sh + ei * ch));
+    }
   }
 }
 

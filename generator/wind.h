@@ -43,6 +43,9 @@ class WindField {
   // relative to W - fall ẑ, at time t_s. Steady-state response (no start-up transient).
   void particle_response(const Eigen::Vector3d& x_ref, double fall_m_s, double tau_s, double t_s,
                          Eigen::Vector3d* displacement_m, Eigen::Vector3d* velocity_m_s) const;
+  // The same at n times at once (the per-mode phase at t = 0 is computed once).
+  void particle_response(const Eigen::Vector3d& x_ref, double fall_m_s, double tau_s, const double* t_s, int n,
+                         Eigen::Vector3d* displacement_m, Eigen::Vector3d* velocity_m_s) const;
   // Upper bound of |velocity_m_s| of particle_response (sum of mode amplitudes).
   double max_gust_m_s() const { return max_gust_; }
 

@@ -89,7 +89,7 @@ TEST(Weather, ManifestRecordsThePhysics) {
   // No wind, no turbulence: every drop falls at exactly the Atlas speed of its diameter.
   TempDir tmp;
   testing::make_clean_dataset(tmp / "clean", SceneOptions{});
-  Json spec = rain_spec();
+  Json spec = rain_spec(25, {{"render", {{"visibility_cutoff", 0.002}}}});  // more rows
   spec["effects"]["rain"]["wind_m_s"] = {0, 0, 0};
   run(tmp / "clean", spec, tmp / "out");
   std::istringstream csv(read_file(tmp / "out/layers/particles_rain/001.csv"));
@@ -121,7 +121,7 @@ TEST(Weather, OneParticleStateForAllViews) {
   SceneOptions o;
   o.time_step_s = 0;
   testing::make_clean_dataset(tmp / "clean", o);
-  run(tmp / "clean", rain_spec(50), tmp / "out");
+  run(tmp / "clean", rain_spec(50, {{"render", {{"visibility_cutoff", 0.001}}}}), tmp / "out");
   auto rows = [&](const std::string& view) {
     std::map<std::string, std::string> m;
     std::istringstream csv(read_file(tmp / ("out/layers/particles_rain/" + view + ".csv")));
