@@ -243,7 +243,9 @@ void render_tile_simd(const RasterSettings<float>& settings, RasterState<float>*
   int64_t num_done = 0;
   const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
   const v4f lane_center = v4f{0.5f, 1.5f, 2.5f, 3.5f} + float(x0);
+  constexpr int64_t kPrefetch = 8;  // records are scattered over memory: fetch ahead of use
   for (int64_t k = begin; k < end && num_done < npix; ++k) {
+    if (k + kPrefetch < end) __builtin_prefetch(&s->splat[int64_t(s->tile_gaussian[k + kPrefetch]) * kSplatFloats]);
     const float* sp = &s->splat[int64_t(s->tile_gaussian[k]) * kSplatFloats];
     if (sp[9] < 0.f) continue;
     int px0, px1, py0, py1;
@@ -324,7 +326,9 @@ void backward_tile_simd(const RasterSettings<float>& settings, RasterState<float
   std::fill(s->entry_grad.begin() + begin * kEntryGrads, s->entry_grad.begin() + end * kEntryGrads, 0.f);
   const v4f lane_center = v4f{0.5f, 1.5f, 2.5f, 3.5f} + float(x0);
   const v4f zero = splat4(0.f), alpha_max = splat4(float(kAlphaMax));
+  constexpr int32_t kPrefetch = 8;
   for (int32_t k = kmax - 1; k >= 0; --k) {
+    if (k >= kPrefetch) __builtin_prefetch(&s->splat[int64_t(s->tile_gaussian[begin + k - kPrefetch]) * kSplatFloats]);
     const float* sp = &s->splat[int64_t(s->tile_gaussian[begin + k]) * kSplatFloats];
     if (sp[9] < 0.f) continue;
     int px0, px1, py0, py1;
