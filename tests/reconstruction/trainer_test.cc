@@ -280,6 +280,26 @@ TEST(InitTest, NearestNeighbourScalesAndColours) {
   EXPECT_NEAR(1 / (1 + std::exp(-g.opacity_logit[0])), 0.1, 1e-6);
 }
 
+TEST(InitTest, RandomInitFillsTheCameraBoundsAndExtentFollowsTheReference) {
+  const std::vector<Camera> cams = ring_cameras(8, 32, 24, 30, 4.0);
+  // Centres on a circle of radius 4 at one height: extent = 1.1 x 4.
+  EXPECT_NEAR(scene_extent(cams), 4.4, 1e-9);
+  const GaussianSet<float> g = init_random(cams, 500, 3);
+  ASSERT_EQ(g.size(), 500u);
+  float zmin = 1e9f, zmax = -1e9f;
+  for (size_t i = 0; i < g.size(); ++i) {
+    EXPECT_LE(std::abs(g.position[i * 3]), 4.0f + 1e-4f);
+    EXPECT_LE(std::abs(g.position[i * 3 + 1]), 4.0f + 1e-4f);
+    zmin = std::min(zmin, g.position[i * 3 + 2]);
+    zmax = std::max(zmax, g.position[i * 3 + 2]);
+    for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(g.log_scale[i * 3 + c]));
+  }
+  // The flat axis (all cameras at z = 1.2) was widened to the extent.
+  EXPECT_GT(zmax - zmin, 3.0f);
+  // Same seed, same cloud.
+  EXPECT_EQ(init_random(cams, 500, 3).position, g.position);
+}
+
 TEST(TrainerTest, OptionsAreValidated) {
   TrainOptions o;
   o.iterations = 0;
