@@ -723,6 +723,69 @@ def add_markers(markers):
     return len(markers)
 
 
+def add_particles(particles):
+    """Airborne particles for the path-tracer validation only (docs/scenes.md): rain drops as water
+    spheres (glass, IOR 1.333), snow flakes as translucent white spheres, each moving linearly from
+    p_world (shutter open) by v_world * exposure_s, rendered with Cycles motion blur. Returns the
+    collection (hidden per view with "particles": false)."""
+    coll = bpy.data.collections.new("particles")
+    bpy.context.scene.collection.children.link(coll)
+    water = bpy.data.materials.new("water_drop")
+    water.use_nodes = True
+    nt = water.node_tree
+    nt.nodes.clear()
+    glass = nt.nodes.new("ShaderNodeBsdfGlass")
+    glass.inputs["IOR"].default_value = 1.333
+    glass.inputs["Roughness"].default_value = 0.0
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(glass.outputs[0], out.inputs["Surface"])
+    flake = bpy.data.materials.new("snow_flake")
+    flake.use_nodes = True
+    nt = flake.node_tree
+    nt.nodes.clear()
+    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (0.9, 0.9, 0.92, 1.0)
+    trans = nt.nodes.new("ShaderNodeBsdfTranslucent")
+    trans.inputs["Color"].default_value = (0.9, 0.9, 0.92, 1.0)
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = 0.5
+    nt.links.new(diffuse.outputs[0], mix.inputs[1])
+    nt.links.new(trans.outputs[0], mix.inputs[2])
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(mix.outputs[0], out.inputs["Surface"])
+    meshes = {}
+    dt = particles["exposure_s"]
+    for i, p in enumerate(particles["items"]):
+        kind = p["kind"]
+        if kind not in meshes:
+            bm = bmesh.new()
+            bmesh.ops.create_icosphere(bm, subdivisions=2, radius=1.0)
+            mesh = bpy.data.meshes.new("particle_" + kind)
+            for f in bm.faces:
+                f.smooth = True
+            bm.to_mesh(mesh)
+            bm.free()
+            mesh.materials.append(water if kind == "rain" else flake)
+            meshes[kind] = mesh
+        obj = bpy.data.objects.new(f"particle{i}", meshes[kind])
+        obj.scale = (p["radius_m"],) * 3
+        p0 = Vector(p["p_world"])
+        p1 = p0 + Vector(p["v_world"]) * dt
+        obj.location = p0
+        obj.keyframe_insert("location", frame=1)
+        obj.location = p1
+        obj.keyframe_insert("location", frame=2)
+        for fc in obj.animation_data.action.fcurves:
+            for kp in fc.keyframe_points:
+                kp.interpolation = "LINEAR"
+        coll.objects.link(obj)
+    scene = bpy.context.scene
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 1.0  # frames: exactly frame 1 -> 2, i.e. the exposure
+    scene.cycles.motion_blur_position = "START"
+    return coll
+
+
 def run(job):
     t0 = time.time()
     out_dir = job["output_dir"]
@@ -746,6 +809,7 @@ def run(job):
             raise SpecError(scene_file + ":/materials", e.what)
         raise
     n_markers = add_markers(job.get("markers", []))
+    particle_coll = add_particles(job["particles"]) if job.get("particles") else None
     setup_lights(job["lights"])
 
     cam_spec = job["camera"]
@@ -774,11 +838,17 @@ def run(job):
         t1 = time.time()
         cam.matrix_world = blender_from_opencv(view["camera_from_world"])
         bpy.context.view_layer.update()
-        scene.frame_current = i + 1
+        # Particle motion is keyed on frames 1 -> 2 (the shutter); plain renders use one frame per view.
+        frame = 1 if particle_coll is not None else i + 1
+        scene.frame_set(frame)
+        if particle_coll is not None:
+            particle_coll.hide_render = not view.get("particles", True)
+        if render["engine"] == "cycles":
+            scene.cycles.seed = view.get("seed", render["seed"])
         fo.file_slots[0].path = view["name"] + "_"
         scene.render.filepath = os.path.join(out_dir, "clean", view["name"] + ".png")
         bpy.ops.render.render(write_still=True)
-        produced = os.path.join(out_dir, "depth_raw", f"{view['name']}_{i + 1:04d}.exr")
+        produced = os.path.join(out_dir, "depth_raw", f"{view['name']}_{frame:04d}.exr")
         os.replace(produced, os.path.join(out_dir, "depth_raw", view["name"] + ".exr"))
         fx, fy, cx, cy = intrinsics(cam_data, W, H)
         views_out.append({"name": view["name"], "width": W, "height": H, "fx": fx, "fy": fy, "cx": cx, "cy": cy,
