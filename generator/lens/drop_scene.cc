@@ -99,6 +99,14 @@ DropScene::DropScene(const EmbreeDevice& device, const GlassPlane& plane, std::v
   WGS_CHECK(std::abs(plane_.water_normal.norm() - 1.0) < 1e-9);
   build_neighbors();
   build_footprint_grid();
+  const int rings = std::max(2, cap_segments / 4);
+  for (const PlacedDrop& p : drops_) {
+    double r = p.sphere_radius;
+    // A facet's vertices lie on the sphere; its points are at least R cos(edge angle) from the center.
+    if (geometry_ == CapGeometry::kTriangles)
+      r *= std::cos(std::max(2 * M_PI / cap_segments, p.contact_angle_rad / rings));
+    inside_radius_.push_back(r);
+  }
   scene_ = rtcNewScene(device_.handle());
   device_.throw_if_error("rtcNewScene");
   rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
@@ -190,7 +198,7 @@ bool DropScene::on_boundary(const Eigen::Vector3d& p, int drop) const {
   if (plane_.height(p) < -tol) return false;
   for (int j : neighbors_[drop]) {
     const PlacedDrop& q = drops_[j];
-    if ((p - q.sphere_center).squaredNorm() < q.sphere_radius * q.sphere_radius * (1 - kInsideRelTolerance))
+    if ((p - q.sphere_center).squaredNorm() < inside_radius_[j] * inside_radius_[j] * (1 - kInsideRelTolerance))
       return false;
   }
   return true;

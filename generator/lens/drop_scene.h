@@ -91,6 +91,10 @@ class DropScene {
   CapGeometry geometry_;
   RTCScene scene_ = nullptr;
   std::vector<std::vector<int>> neighbors_;  // drops whose balls overlap, per drop
+  // Radius within which a point counts as inside a drop (for the union): the sphere radius, or for
+  // triangulated caps the radius of the facets' inscribed sphere, so that seams between merged
+  // faceted drops leave no gap.
+  std::vector<double> inside_radius_;
   std::vector<int> prim_drop_;               // triangles: primitive -> drop
   std::vector<Eigen::Vector3f> vertex_normals_;
   std::vector<Eigen::Vector3i> triangles_;

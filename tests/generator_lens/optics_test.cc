@@ -291,6 +291,39 @@ TEST_F(LensPathTest, TotalInternalReflectionIsBounded) {
   }
 }
 
+TEST_F(LensPathTest, OverlappingDropsMergeIntoOneBody) {
+  // Two hemispheres whose centers are 1.2 mm apart (radius 1 mm): a ray through the overlap enters
+  // the water once and leaves once, never at a point inside the other drop.
+  for (CapGeometry geometry : {CapGeometry::kAnalytic, CapGeometry::kTriangles}) {
+    GlassPlane plane = test_plane();
+    const PlacedDrop a = test_drop(0, plane, -0.6e-3, 0, 1e-3, 90), b = test_drop(1, plane, 0.6e-3, 0, 1e-3, 90);
+    DropScene scene(device, plane, {a, b}, geometry, 64);
+    int through_overlap = 0;
+    for (int i = -20; i <= 20; ++i) {
+      const Vec3 d = Vec3(i * 0.05e-3 / 0.03, 0.1e-3 / 0.03, 1).normalized();
+      std::vector<PathEvent> events;
+      PathResult r = trace_path(scene, Vec3::Zero(), d, options, &events);
+      ASSERT_TRUE(r.touched_water);
+      int refractions = 0;
+      for (const PathEvent& e : events) {
+        refractions += !e.total_internal_reflection;
+        if (!e.through_base) {
+          const PlacedDrop& other = scene.drops()[1 - e.drop];
+          // Facets of 64-segment caps lie up to R (1 - cos(2 pi / 64)) inside the sphere.
+          const double inside = geometry == CapGeometry::kAnalytic ? 1 - 1e-9 : std::cos(2 * M_PI / 64);
+          EXPECT_GE((e.point - other.sphere_center).norm(), other.sphere_radius * inside);
+        }
+      }
+      const int tir = int(events.size()) - refractions;
+      if (tir > options.max_bounces) continue;  // trapped by total internal reflection, cut
+      EXPECT_EQ(refractions, 2) << "enter once, leave once; ray " << i << " geometry " << int(geometry)
+                                << " tir " << tir;
+      through_overlap += std::abs(i * 0.05e-3) < 0.4e-3;
+    }
+    EXPECT_GT(through_overlap, 10);
+  }
+}
+
 TEST(LensEmbreeTest, DeviceErrorsBecomeExceptions) {
   EmbreeDevice device;
   // An invalid geometry type makes Embree report RTC_ERROR_INVALID_ARGUMENT through the callback.
