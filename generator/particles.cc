@@ -99,9 +99,6 @@ ParticleField::ParticleField(const SpeciesOptions& options, uint64_t seed)
   if (!(options.rate_mm_h > 0)) return;  // rate 0: an empty field
   const physics::ExponentialSizeDistribution dist = options.distribution();
   const int n = options.size_classes;
-  const double flutter_speed = options.species == Species::kSnow
-                                   ? options.flutter_amplitude_m[1] * 2 * kPi * options.flutter_frequency_hz[1]
-                                   : 0.0;
   for (int k = 0; k < n; ++k) {
     SizeClass c;
     c.lo_mm = options.d_min_mm * std::pow(options.d_max_mm / options.d_min_mm, double(k) / n);
@@ -110,9 +107,6 @@ ParticleField::ParticleField(const SpeciesOptions& options, uint64_t seed)
     c.frame_fall_m_s = options.fall_speed_m_s(0.5 * (c.lo_mm + c.hi_mm));
     c.cell_m = std::clamp(std::cbrt(options.particles_per_cell / std::max(c.number_density_m3, 1e-12)), 0.05, 20.0);
     c.max_visual_radius_m = options.visual_radius_m(c.hi_mm);
-    const double dv = std::max(std::abs(options.fall_speed_m_s(c.hi_mm) - c.frame_fall_m_s),
-                               std::abs(options.fall_speed_m_s(c.lo_mm) - c.frame_fall_m_s));
-    c.max_relative_speed_m_s = dv + wind_.max_gust_m_s() + flutter_speed;
     classes_.push_back(c);
   }
 }

@@ -52,7 +52,6 @@ struct SizeClass {
   double frame_fall_m_s = 0;       // v_k
   double cell_m = 0;               // s_k
   double max_visual_radius_m = 0;  // of the class's largest particle
-  double max_relative_speed_m_s = 0;  // bound on |velocity - U_k|
 };
 
 using CellIndex = Eigen::Matrix<int64_t, 3, 1>;
