@@ -167,6 +167,33 @@ TEST(LensRenderTest, WindowAttachedDropsShowParallax) {
   EXPECT_GT(matched, 5);
 }
 
+TEST(LensRenderTest, WindowDropsSlideDownTheWorld) {
+  // A pane facing a camera that looks along world +y (camera y = -world z): large drops slide along
+  // world -z, which is image down (+y in the camera frame), at the given speed.
+  Camera cam = test_camera(160, 120, 140, "a");
+  Eigen::Matrix3d r;
+  r << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  cam.camera_from_world.topLeftCorner<3, 3>() = r;
+  const Image img = test_image(cam.width, cam.height);
+  LensDropletSpec spec = resolve_lens_droplet_spec(
+      spec_from(R"({"count": 30, "attach": "window", "glass_distance_m": 0.1, "slide_speed_mm_s": 5,
+                   "slide_min_radius_mm": 1.0})"),
+      cam);
+  EXPECT_NEAR(spec.window->up_world.z(), 1.0, 1e-12);
+  LensDropletRenderer renderer(spec, 3, cam);
+  Json d0 = renderer.render(img, cam, 0.0).drops["drops"], d1 = renderer.render(img, cam, 0.5).drops["drops"];
+  int slid = 0;
+  for (const Json& p : d0)
+    for (const Json& q : d1)
+      if (p["id"] == q["id"] && p["outline_radius_mm"].get<double>() >= 1.0) {
+        EXPECT_NEAR(q["base_center_camera_m"][1].get<double>() - p["base_center_camera_m"][1].get<double>(), 2.5e-3,
+                    1e-12);
+        EXPECT_NEAR(q["base_center_camera_m"][0].get<double>(), p["base_center_camera_m"][0].get<double>(), 1e-12);
+        ++slid;
+      }
+  EXPECT_GT(slid, 3);
+}
+
 TEST(LensRenderTest, ViewThroughADropIsInverted) {
   // Left half dark, right half bright; a hemispherical drop on the axis shows the bright half on its
   // left side.
