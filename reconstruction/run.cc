@@ -125,7 +125,8 @@ GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions&
   std::vector<Camera> train_cams;
   for (const std::string& v : dataset.split("train")) train_cams.push_back(dataset.camera(v));
   *source = "random:" + std::to_string(options.random_init_count);
-  return init_random(train_cams, options.random_init_count, options.seed);
+  return init_random(train_cams, options.random_init_count, options.seed, options.random_init_near_m,
+                     options.random_init_far_m);
 }
 
 TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_iteration) {

@@ -75,6 +75,9 @@ void TrainOptions::validate(const std::string& where) const {
     if (!(background[c] >= 0 && background[c] <= 1))
       fail("background", std::to_string(background[c]), "each channel must be in [0, 1]");
   if (random_init_count < 1) fail("random_init_count", std::to_string(random_init_count), "must be >= 1");
+  if (!(random_init_near_m > 0 && random_init_far_m > random_init_near_m && std::isfinite(random_init_far_m)))
+    fail("random_init_near_m/far_m", std::to_string(random_init_near_m) + "/" + std::to_string(random_init_far_m),
+         "need 0 < near < far < inf");
 }
 
 Json TrainOptions::to_json() const {
@@ -102,7 +105,9 @@ Json TrainOptions::to_json() const {
               {"max_screen_size_px", max_screen_size_px},
               {"max_world_size", max_world_size},
               {"background", {background[0], background[1], background[2]}},
-              {"random_init_count", random_init_count}};
+              {"random_init_count", random_init_count},
+              {"random_init_near_m", random_init_near_m},
+              {"random_init_far_m", random_init_far_m}};
 }
 
 TrainOptions TrainOptions::from_json(const JsonReader& r) {
@@ -136,6 +141,8 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
     for (int c = 0; c < 3; ++c) o.background[c] = b.at(c).as<double>();
   }
   o.random_init_count = r.get_or("random_init_count", o.random_init_count);
+  o.random_init_near_m = r.get_or("random_init_near_m", o.random_init_near_m);
+  o.random_init_far_m = r.get_or("random_init_far_m", o.random_init_far_m);
   r.finish();
   o.validate(r.where());
   return o;
@@ -155,28 +162,21 @@ double scene_extent(const std::vector<Camera>& cameras) {
   return max_dist > 0 ? max_dist * 1.1 : 1.0;
 }
 
-GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed) {
+GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed, double near_m,
+                               double far_m) {
   WGS_CHECK(!cameras.empty());
   WGS_CHECK_GT(count, 0);
-  Eigen::Vector3d lo = cameras[0].center_world(), hi = lo;
-  for (const Camera& c : cameras) {
-    lo = lo.cwiseMin(c.center_world());
-    hi = hi.cwiseMax(c.center_world());
-  }
-  // Axes along which the cameras do not spread (a ring at one height, a forward-facing rig) are
-  // widened to the scene extent so the box has volume.
-  const double extent = scene_extent(cameras);
-  for (int k = 0; k < 3; ++k) {
-    if (hi[k] - lo[k] < extent) {
-      const double mid = 0.5 * (lo[k] + hi[k]);
-      lo[k] = mid - 0.5 * extent;
-      hi[k] = mid + 0.5 * extent;
-    }
-  }
+  WGS_CHECK(near_m > 0 && far_m > near_m);
+  // Uniform over the train cameras' view frusta between near_m and far_m, uniform in inverse depth
+  // (as much volume per pixel close by as far away): works for orbits and forward-facing rigs alike,
+  // where a box around the camera centres would miss a scene in front of a sliding rig.
   std::vector<Eigen::Vector3d> pts(count), cols(count);
   for (int i = 0; i < count; ++i) {
     Rng rng(seed, kStreamRandomInit, uint64_t(i));
-    for (int k = 0; k < 3; ++k) pts[i][k] = lo[k] + (hi[k] - lo[k]) * rng.uniform_double();
+    const Camera& cam = cameras[rng.uniform_int(uint32_t(cameras.size()))];
+    const Eigen::Vector2d uv(cam.width * rng.uniform_double(), cam.height * rng.uniform_double());
+    const double inv = 1.0 / far_m + (1.0 / near_m - 1.0 / far_m) * rng.uniform_double();
+    pts[i] = cam.unproject(uv, 1.0 / inv);
     for (int k = 0; k < 3; ++k) cols[i][k] = rng.uniform_double();
   }
   return init_from_points(pts, cols);

@@ -42,6 +42,8 @@ struct TrainOptions {
   double max_world_size = 0.1;        // prune scale > this fraction of the extent (after first reset)
   std::array<double, 3> background = {0, 0, 0};  // sRGB in [0, 1]
   int random_init_count = 50000;      // Gaussians when the dataset has no COLMAP points
+  double random_init_near_m = 0.5;    // depth range (m) of the random initialization
+  double random_init_far_m = 20.0;
 
   void validate(const std::string& where) const;
   Json to_json() const;
@@ -59,8 +61,10 @@ struct TrainView {
 // Radius of the camera centres around their mean, times 1.1 (getNerfppNorm): the "cameras extent".
 double scene_extent(const std::vector<Camera>& cameras);
 
-// Random initialization inside the cameras' bounds (see docs/reconstruction.md).
-GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed);
+// Random initialization inside the cameras' view frusta between near_m and far_m, uniform in inverse
+// depth, random colours (see docs/reconstruction.md).
+GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed, double near_m,
+                               double far_m);
 
 // Thrown when a loss or gradient stops being finite; names the parameter, the Gaussian and the step.
 class TrainingDiverged : public std::runtime_error {
