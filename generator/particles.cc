@@ -105,7 +105,8 @@ ParticleField::ParticleField(const SpeciesOptions& options, uint64_t seed)
     c.hi_mm = options.d_min_mm * std::pow(options.d_max_mm / options.d_min_mm, double(k + 1) / n);
     c.number_density_m3 = dist.number_density_m3(c.lo_mm, c.hi_mm);
     c.frame_fall_m_s = options.fall_speed_m_s(0.5 * (c.lo_mm + c.hi_mm));
-    c.cell_m = std::clamp(std::cbrt(options.particles_per_cell / std::max(c.number_density_m3, 1e-12)), 0.05, 20.0);
+    // Cells of at most 2 m follow the thin apex and edges of a frustum closely for sparse classes.
+    c.cell_m = std::clamp(std::cbrt(options.particles_per_cell / std::max(c.number_density_m3, 1e-12)), 0.05, 2.0);
     c.max_visual_radius_m = options.visual_radius_m(c.hi_mm);
     classes_.push_back(c);
   }

@@ -57,7 +57,7 @@ double relative_speed_bound_m_s(const ParticleField& field, int k) {
   const SpeciesOptions& o = field.options();
   return std::abs(o.fall_speed_m_s(cls.hi_mm) - o.fall_speed_m_s(cls.lo_mm)) +
          kGustSigmas * std::sqrt(3.0) * o.wind.turbulence_rms_m_s +
-         o.flutter_amplitude_m[1] * 2 * M_PI * o.flutter_frequency_hz[1];
+         (o.species == Species::kSnow ? o.flutter_amplitude_m[1] * 2 * M_PI * o.flutter_frequency_hz[1] : 0.0);
 }
 
 std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Camera& cam, double near,
