@@ -272,6 +272,26 @@ TEST(Weather, ErrorsNameTheSpecLocation) {
   EXPECT_FALSE(fs::exists(tmp / "out"));
 }
 
+TEST(Weather, RunOptionsAreValidated) {
+  TempDir tmp;
+  testing::make_clean_dataset(tmp / "clean", SceneOptions{});
+  WeatherRunOptions bad_threshold;
+  bad_threshold.mask_threshold = 0;
+  EXPECT_THROW(run(tmp / "clean", rain_spec(), tmp / "out", bad_threshold), InputError);
+  WeatherRunOptions unknown_view;
+  unknown_view.view_order = {"000", "001", "007"};
+  EXPECT_THROW(run(tmp / "clean", rain_spec(), tmp / "out", unknown_view), InputError);
+  WeatherRunOptions missing_view;
+  missing_view.view_order = {"000", "001"};
+  EXPECT_THROW(run(tmp / "clean", rain_spec(), tmp / "out", missing_view), InputError);
+  // A focus distance inside the focal length cannot be imaged.
+  EXPECT_THROW(run(tmp / "clean", rain_spec(25, {{"camera", {{"f_number", 2.0}, {"focal_length_mm", 50.0},
+                                                               {"focus_distance_m", 0.01}}}}),
+                   tmp / "out"),
+               InputError);
+  EXPECT_FALSE(fs::exists(tmp / "out"));
+}
+
 TEST(Weather, EmbeddedSpecReportsItsPointer) {
   TempDir tmp;
   testing::make_clean_dataset(tmp / "clean", SceneOptions{});
