@@ -245,6 +245,14 @@ TEST(Weather, HardCasesStayFiniteAndBounded) {
         for (float v : img.data) ASSERT_TRUE(std::isfinite(v) && v >= 0 && v <= 1) << c.name << " " << e.path();
       }
   }
+  // Bounded memory: the peak resident size of this whole test process stays far below the machine's
+  // (these cases used ~0.2 GB when written; 2 GB would mean the population escaped its bounds).
+  std::ifstream status("/proc/self/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      EXPECT_LT(std::stol(line.substr(6)), 2L * 1024 * 1024) << line;  // kB
+    }
+  }
 }
 
 TEST(Weather, ErrorsNameTheSpecLocation) {
@@ -319,6 +327,7 @@ TEST(Weather, CommandLine) {
   const std::string bad = bin + " --quiet weather --in " + (tmp / "clean") + " --spec " + (tmp / "bad.json") +
                           " --out " + (tmp / "out2") + " 2>/dev/null";
   EXPECT_EQ(WEXITSTATUS(std::system(bad.c_str())), 2);
+  EXPECT_EQ(std::system((bin + " weather --help > /dev/null").c_str()), 0);
 }
 
 }  // namespace
