@@ -137,48 +137,63 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
   });
 }
 
-// Builds the per-tile depth-sorted lists and, per Gaussian, the entries of its tiles.
+// Builds the per-tile depth-sorted lists and, per Gaussian, the entries of its tiles. One global
+// sort of the visible Gaussians by (depth, index), then a scatter in that order: every tile list
+// comes out sorted exactly as a per-tile sort would leave it. The packed records are copied into
+// depth order as well, so that walking a tile list reads memory in increasing address order.
 template <typename T>
 void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   const int64_t n = int64_t(s->radius.size());
   const int num_tiles = s->tiles_x * s->tiles_y;
   s->entry_offset.assign(n + 1, 0);
+  keys->clear();
   for (int64_t i = 0; i < n; ++i) {
     const int32_t* r = &s->rect[i * 4];
     const int64_t area = s->radius[i] > 0 ? int64_t(r[2] - r[0]) * (r[3] - r[1]) : 0;
     s->entry_offset[i + 1] = s->entry_offset[i] + area;
+    if (area == 0) continue;
+    // Depth is > 0.2, so the float bit pattern orders like the value; ties go to the lower index.
+    const float d = float(s->depth[i]);
+    uint32_t bits;
+    std::memcpy(&bits, &d, 4);
+    keys->push_back((uint64_t(bits) << 32) | uint64_t(uint32_t(i)));
   }
+  std::sort(keys->begin(), keys->end());
+  const int64_t visible = int64_t(keys->size());
   const int64_t entries = s->entry_offset[n];
   s->tile_offset.assign(num_tiles + 1, 0);
   for (int64_t i = 0; i < n; ++i) {
-    if (s->radius[i] == 0) continue;
+    if (s->entry_offset[i + 1] == s->entry_offset[i]) continue;
     const int32_t* r = &s->rect[i * 4];
     for (int ty = r[1]; ty < r[3]; ++ty)
       for (int tx = r[0]; tx < r[2]; ++tx) ++s->tile_offset[ty * s->tiles_x + tx + 1];
   }
   for (int t = 0; t < num_tiles; ++t) s->tile_offset[t + 1] += s->tile_offset[t];
-  keys->resize(entries);
-  std::vector<int64_t> cursor(s->tile_offset.begin(), s->tile_offset.end() - 1);
-  for (int64_t i = 0; i < n; ++i) {
-    if (s->radius[i] == 0) continue;
-    // Depth is > 0.2, so the float bit pattern orders like the value; ties go to the lower index.
-    const float d = float(s->depth[i]);
-    uint32_t bits;
-    std::memcpy(&bits, &d, 4);
-    const uint64_t key = (uint64_t(bits) << 32) | uint64_t(uint32_t(i));
-    const int32_t* r = &s->rect[i * 4];
-    for (int ty = r[1]; ty < r[3]; ++ty)
-      for (int tx = r[0]; tx < r[2]; ++tx) (*keys)[cursor[ty * s->tiles_x + tx]++] = key;
-  }
   s->tile_gaussian.resize(entries);
+  s->tile_rank.resize(entries);
   s->entry_of.resize(entries);
+  s->splat_sorted.resize(size_t(visible) * kSplatFloats);
+  std::vector<int64_t> cursor(s->tile_offset.begin(), s->tile_offset.end() - 1);
+  for (int64_t rank = 0; rank < visible; ++rank) {
+    const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
+    const int32_t* r = &s->rect[int64_t(gi) * 4];
+    for (int ty = r[1]; ty < r[3]; ++ty)
+      for (int tx = r[0]; tx < r[2]; ++tx) {
+        const int64_t k = cursor[ty * s->tiles_x + tx]++;
+        s->tile_gaussian[k] = gi;
+        s->tile_rank[k] = int32_t(rank);
+      }
+  }
+  parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
+    for (int64_t rank = lo; rank < hi; ++rank) {
+      const int64_t gi = int64_t((*keys)[rank] & 0xffffffffu);
+      std::copy_n(&s->splat[gi * kSplatFloats], kSplatFloats, &s->splat_sorted[rank * kSplatFloats]);
+    }
+  });
   parallel_for(0, num_tiles, [&](int64_t t) {
-    const int64_t b = s->tile_offset[t], e = s->tile_offset[t + 1];
-    std::sort(keys->begin() + b, keys->begin() + e);
     const int tx = int(t % s->tiles_x), ty = int(t / s->tiles_x);
-    for (int64_t k = b; k < e; ++k) {
-      const int32_t gi = int32_t((*keys)[k] & 0xffffffffu);
-      s->tile_gaussian[k] = gi;
+    for (int64_t k = s->tile_offset[t]; k < s->tile_offset[t + 1]; ++k) {
+      const int32_t gi = s->tile_gaussian[k];
       const int32_t* r = &s->rect[int64_t(gi) * 4];
       const int64_t j = int64_t(ty - r[1]) * (r[2] - r[0]) + (tx - r[0]);
       s->entry_of[s->entry_offset[gi] + j] = k;
@@ -245,8 +260,8 @@ void render_tile_simd(const RasterSettings<float>& settings, RasterState<float>*
   const v4f lane_center = v4f{0.5f, 1.5f, 2.5f, 3.5f} + float(x0);
   constexpr int64_t kPrefetch = 8;  // records are scattered over memory: fetch ahead of use
   for (int64_t k = begin; k < end && num_done < npix; ++k) {
-    if (k + kPrefetch < end) __builtin_prefetch(&s->splat[int64_t(s->tile_gaussian[k + kPrefetch]) * kSplatFloats]);
-    const float* sp = &s->splat[int64_t(s->tile_gaussian[k]) * kSplatFloats];
+    if (k + kPrefetch < end) __builtin_prefetch(&s->splat_sorted[int64_t(s->tile_rank[k + kPrefetch]) * kSplatFloats]);
+    const float* sp = &s->splat_sorted[int64_t(s->tile_rank[k]) * kSplatFloats];
     if (sp[9] < 0.f) continue;
     int px0, px1, py0, py1;
     pixel_range(sp[0], sp[9], x0, x1 - 1, &px0, &px1);
@@ -328,8 +343,8 @@ void backward_tile_simd(const RasterSettings<float>& settings, RasterState<float
   const v4f zero = splat4(0.f), alpha_max = splat4(float(kAlphaMax));
   constexpr int32_t kPrefetch = 8;
   for (int32_t k = kmax - 1; k >= 0; --k) {
-    if (k >= kPrefetch) __builtin_prefetch(&s->splat[int64_t(s->tile_gaussian[begin + k - kPrefetch]) * kSplatFloats]);
-    const float* sp = &s->splat[int64_t(s->tile_gaussian[begin + k]) * kSplatFloats];
+    if (k >= kPrefetch) __builtin_prefetch(&s->splat_sorted[int64_t(s->tile_rank[begin + k - kPrefetch]) * kSplatFloats]);
+    const float* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
     if (sp[9] < 0.f) continue;
     int px0, px1, py0, py1;
     pixel_range(sp[0], sp[9], x0, x1 - 1, &px0, &px1);
@@ -415,7 +430,7 @@ void render_tiles(const RasterSettings<T>& settings, RasterState<T>* s) {
     const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
     const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax), t_min = T(kTransmittanceMin);
     for (int64_t k = begin; k < end && num_done < npix; ++k) {
-      const T* sp = &s->splat[int64_t(s->tile_gaussian[k]) * kSplatFloats];
+      const T* sp = &s->splat_sorted[int64_t(s->tile_rank[k]) * kSplatFloats];
       if (sp[9] < T(0)) continue;
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T r = sp[6], g = sp[7], b = sp[8];
@@ -546,7 +561,7 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
     std::fill(s->entry_grad.begin() + begin * kEntryGrads, s->entry_grad.begin() + end * kEntryGrads, T(0));
     alignas(64) T lane[kEntryGrads][kTileSize];
     for (int32_t k = kmax - 1; k >= 0; --k) {
-      const T* sp = &s->splat[int64_t(s->tile_gaussian[begin + k]) * kSplatFloats];
+      const T* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
       if (sp[9] < T(0)) continue;
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T cr = sp[6], cg = sp[7], cbl = sp[8];

@@ -48,6 +48,8 @@ struct RasterState {
   // Per tile.
   std::vector<int64_t> tile_offset;   // tiles + 1
   std::vector<int32_t> tile_gaussian; // entries: Gaussian ids, each tile's range sorted by depth
+  std::vector<int32_t> tile_rank;     // entries: depth rank of the Gaussian (index into splat_sorted)
+  std::vector<T> splat_sorted;        // visible Gaussians' records in depth order
   std::vector<int64_t> entry_of;      // entries: per Gaussian, its tiles' entry indices, tile order
   // Per pixel.
   std::vector<T> image;          // H x W x 3
