@@ -61,13 +61,14 @@ double relative_speed_bound_m_s(const ParticleField& field, int k) {
 }
 
 std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Camera& cam, double near,
-                                     double distance) {
+                                     double distance, double extra_margin) {
   const SizeClass& cls = field.classes()[size_t(k)];
   const double s = cls.cell_m;
   const double t0 = cam.time_s, exposure = cam.exposure_s;
   const Eigen::Vector3d u = field.frame_velocity(k);
   // Slack: motion relative to the frame over the exposure, plus the particle's own size.
-  const double margin = relative_speed_bound_m_s(field, k) * exposure + 2 * cls.max_visual_radius_m + 1e-3;
+  const double margin =
+      relative_speed_bound_m_s(field, k) * exposure + 2 * cls.max_visual_radius_m + extra_margin + 1e-3;
   // Frustum planes in camera space, inward unit normals: n . p_camera + offset >= 0.
   struct Plane {
     Eigen::Vector3d n;
@@ -189,7 +190,13 @@ void ParticleStage::run(WeatherView& v) const {
   for (int k = 0; k < int(field_.classes().size()); ++k) {
     const double d = population_distance_m(field_, k, view, opacity, render_);
     if (!(d > render_.near_m)) continue;
-    for (const CellIndex& c : visible_cells(field_, k, cam, render_.near_m, d)) items.push_back({k, c});
+    // A defocused particle just outside the frustum can blur into the image: its circle of
+    // confusion, in world units at depth z, is A |z - s| / (2 (s - f)) (at most this over [0, d]).
+    double blur_m = 0;
+    if (view.lens)
+      blur_m = 0.5 * view.lens->aperture_m * std::max(view.lens->focus_m, d - view.lens->focus_m) /
+               (view.lens->focus_m - view.lens->focal_length_m);
+    for (const CellIndex& c : visible_cells(field_, k, cam, render_.near_m, d, blur_m)) items.push_back({k, c});
   }
   const int64_t n_chunks = num_chunks(0, int64_t(items.size()), kCellsPerChunk);
   std::vector<SplatList> chunk_splats(static_cast<size_t>(n_chunks));

@@ -78,9 +78,10 @@ class ParticleStage : public WeatherStage {
 };
 
 // Cells of class k of the field that can hold a particle visible in the view (frustum from near_m
-// to distance_m, dilated by the motion over the exposure), in a fixed order.
+// to distance_m, dilated by the motion over the exposure and by extra_margin_m, e.g. the largest
+// defocus blur in world units), in a fixed order.
 std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Camera& camera,
-                                     double near_m, double distance_m);
+                                     double near_m, double distance_m, double extra_margin_m = 0);
 
 // Bound on a particle's speed relative to its class frame: fall-speed spread of the class, gusts
 // at 3 standard deviations per component, flutter.
