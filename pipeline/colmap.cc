@@ -182,7 +182,11 @@ TriangulationResult triangulate_known_poses(const std::vector<Camera>& cameras, 
   run_colmap(o, "point_triangulator",
              {"--database_path", db, "--image_path", image_dir, "--input_path", in_dir.string(), "--output_path",
               tri_dir.string(), "--Mapper.ba_refine_focal_length", "0", "--Mapper.ba_refine_principal_point", "0",
-              "--Mapper.ba_refine_extra_params", "0", "--Mapper.num_threads", threads(o)},
+              "--Mapper.ba_refine_extra_params", "0",
+              // The poses are exact, so true correspondences reproject within a pixel or two; matches on
+              // lens drops and streaks do not. COLMAP's 4 px defaults let them into the model.
+              "--Mapper.filter_max_reproj_error", "2", "--Mapper.tri_merge_max_reproj_error", "2",
+              "--Mapper.tri_complete_max_reproj_error", "2", "--Mapper.num_threads", threads(o)},
              log);
   fs::create_directories(model_dir);
   run_colmap(o, "model_converter",

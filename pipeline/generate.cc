@@ -34,7 +34,7 @@ Json stats_json(const ModelStats& s) {
 }
 
 // Bumped whenever the meaning of a cached render changes without the job or the script changing.
-constexpr const char* kCacheVersion = "weathergs-clean-cache-v1";
+constexpr const char* kCacheVersion = "weathergs-clean-cache-v2";
 
 std::string cache_key(const SceneSpec& scene, const std::string& variant, const GenerateOptions& o) {
   const VariantSpec v = scene.variant(variant);
@@ -113,13 +113,14 @@ GenerateSummary generate_variant(const std::string& scene_path, const std::strin
                      "this build has no weather generator (generator/weather.h); only variants without "
                      "airborne weather (e.g. \"clear\") can be generated");
 
+  // Created first so that a bad --out fails before a long render.
+  AtomicDirectory out(out_dir);
   GenerateSummary s;
   s.scene = scene.name;
   s.variant = variant.name;
   s.out_dir = out_dir;
   s.cache_entry = ensure_clean_render(scene, variant.name, o, &s.cache_hit, &s.render_s);
 
-  AtomicDirectory out(out_dir);
   const fs::path root(out.path());
   const std::string name = scene.name + "_" + variant.name;
   auto t = std::chrono::steady_clock::now();

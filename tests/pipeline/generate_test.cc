@@ -72,7 +72,7 @@ void check_model(const std::string& model_dir, const std::vector<Camera>& camera
       ASSERT_TRUE(uv.has_value());
       worst = std::max(worst, (*uv - img.points2d.at(size_t(idx)).head<2>()).norm());
     }
-  EXPECT_LT(worst, 4.0) << "COLMAP's default triangulation keeps observations within 4 px";
+  EXPECT_LT(worst, 2.0) << "triangulation keeps observations within 2 px (Mapper.filter_max_reproj_error)";
 }
 
 TEST(GenerateTest, TinyRainVariantEndToEnd) {
