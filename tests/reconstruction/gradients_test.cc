@@ -221,9 +221,10 @@ TEST(GradientTest, MaskedL1SsimLoss) {
       expect_close(v[i], central_difference(f, &render[i]), "pixel " + std::to_string(i));
     }
     if (m) {
-      for (int p = 0; p < w * h; ++p)
-        if (mask[p])
-          for (int c = 0; c < 3; ++c) EXPECT_EQ(v[p * 3 + c], 0.0) << "masked pixel " << p;
+      for (int p = 0; p < w * h; ++p) {
+        if (!mask[p]) continue;
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(v[p * 3 + c], 0.0) << "masked pixel " << p;
+      }
     }
   }
 }

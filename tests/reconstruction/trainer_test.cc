@@ -70,19 +70,6 @@ double mean_psnr(const Trainer& t, const std::vector<TrainView>& views) {
   return sum / views.size();
 }
 
-TrainOptions short_options(int iterations) {
-  TrainOptions o;
-  o.iterations = iterations;
-  // The schedule of a 30k run compressed to this length (same ratios).
-  const double f = iterations / 30000.0;
-  o.densify_from = std::max(1, int(500 * f));
-  o.densify_until = int(15000 * f);
-  o.densification_interval = std::max(1, int(100 * f));
-  o.opacity_reset_interval = std::max(1, int(3000 * f));
-  o.sh_degree_interval = std::max(1, int(1000 * f));
-  return o;
-}
-
 TEST(TrainerTest, OverfitsSmallSyntheticScene) {
   Scene s = make_scene(300, 96, 72);
   const auto t0 = std::chrono::steady_clock::now();
