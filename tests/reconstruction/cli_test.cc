@@ -69,5 +69,34 @@ TEST(CliTest, TrainResumeRender) {
   EXPECT_FALSE(fs::exists(dir / "r5"));
 }
 
+TEST(CliTest, MaskAndImageFolders) {
+  weathergs::testing::TempDir dir;
+  const GaussianSet<float> truth = testing::random_gaussians<float>(60, 5, 1.0, 0.12, 0.0);
+  const Dataset d = testing::write_synthetic_dataset(dir / "data", truth, testing::ring_cameras(9, 40, 30, 36, 4.0), true);
+  // A mask folder (255 = ignore) covering part of every train view, and a copy of the images as a
+  // custom image folder.
+  fs::create_directories(dir / "masks");
+  fs::create_directories(dir / "imgs");
+  for (const std::string& v : d.split("train")) {
+    Image m(40, 30, 1, ColorSpace::kLinear);
+    for (int y = 0; y < 10; ++y)
+      for (int x = 0; x < 15; ++x) m.at(x, y) = 1.f;
+    write_mask(dir / "masks/" + v + ".png", m);
+    fs::copy_file(d.path("images", v), dir / "imgs/" + v + ".png");
+  }
+  ASSERT_EQ(run("train --data " + dir / "data" + " --images " + dir / "imgs" + " --masks " + dir / "masks" +
+                " --iterations 10 --out " + dir / "run"),
+            0);
+  JsonReader info = JsonReader::from_file(dir / "run/run.json");
+  EXPECT_EQ(info.get<std::string>("masks"), dir / "masks");
+  EXPECT_EQ(info.get<std::string>("images"), dir / "imgs");
+  // Missing folders and wrongly sized masks are input errors.
+  EXPECT_EQ(run("train --data " + dir / "data" + " --images clean --out " + dir / "r2"), 2);
+  write_mask(dir / "masks/" + d.split("train")[0] + ".png", Image(8, 8, 1, ColorSpace::kLinear));
+  EXPECT_EQ(run("train --data " + dir / "data" + " --masks " + dir / "masks" + " --out " + dir / "r3"), 2);
+  EXPECT_FALSE(fs::exists(dir / "r2"));
+  EXPECT_FALSE(fs::exists(dir / "r3"));
+}
+
 }  // namespace
 }  // namespace weathergs::recon
