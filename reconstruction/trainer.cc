@@ -300,7 +300,9 @@ IterationStats Trainer::step() {
       // its optimizer.step() of this iteration updates nothing.
       skip_adam = true;
     }
-    if (it % options_.opacity_reset_interval == 0) {
+    // As the reference: also reset once at densify_from when training on a white background.
+    const bool white = options_.background[0] == 1 && options_.background[1] == 1 && options_.background[2] == 1;
+    if (it % options_.opacity_reset_interval == 0 || (white && it == options_.densify_from)) {
       reset_opacity();
       skip_adam = true;
     }
