@@ -72,9 +72,7 @@ struct Result {
 Result render(const RenderOptions& options) {
   const Scene& s = scene();
   const ParticleStage stage(rain(), options, 7, false);
-  WeatherView v{s.camera, s.clean, s.depth, s.env, s.clean,
-                Image(s.camera.width, s.camera.height, 1, ColorSpace::kLinear), false, FogState{}, {}, {}, {},
-                std::nullopt, Json()};
+  WeatherView v(s.camera, s.clean, s.depth, s.env);
   stage.run(v);
   return {to_srgb(v.radiance), v.particle_alpha, v.counters["rain.particles_drawn"]};
 }

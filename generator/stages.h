@@ -25,6 +25,11 @@ constexpr float kBackgroundDepth_m = 65504.0f;
 
 // One view passing through the stages.
 struct WeatherView {
+  // Starts with radiance = clean and zero particle alpha; every other member default-initialized.
+  WeatherView(const Camera& camera_, const Image& clean_, const Image& depth_, const EnvironmentLight& environment_)
+      : camera(camera_), clean(clean_), depth(depth_), environment(environment_), radiance(clean_),
+        particle_alpha(camera_.width, camera_.height, 1, ColorSpace::kLinear) {}
+
   const Camera& camera;          // spec overrides applied
   const Image& clean;            // linear RGB
   const Image& depth;            // planar z, 1 channel

@@ -165,8 +165,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
     if (depth.width != cam.width || depth.height != cam.height)
       throw InputError(depth_path, "depth is " + depth.to_string() + ", expected the camera size");
     const EnvironmentLight env = make_environment_light(clean_img, sky);
-    WeatherView view{cam, clean_img, depth, env, clean_img, Image(cam.width, cam.height, 1, ColorSpace::kLinear),
-                     false, FogState{}, {}, {}, {}, std::nullopt, Json()};
+    WeatherView view(cam, clean_img, depth, env);
     for (size_t s = 0; s < stages.size(); ++s) {
       const auto start = std::chrono::steady_clock::now();
       stages[s]->run(view);
