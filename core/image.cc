@@ -145,7 +145,12 @@ void write_image(const std::string& path, const Image& img, const ImageWriteOpti
     WGS_CHECK_EQ(int(options.channel_names.size()), img.channels);
     spec.channelnames = options.channel_names;
   }
-  if (is_exr) spec.attribute("compression", "zip");
+  if (is_exr) {
+    spec.attribute("compression", "zip");
+    // OpenEXR stamps the write time (capDate) unless DateTime is set: clear it so that the same image
+    // gives the same bytes (determinism of every output).
+    spec.attribute("DateTime", "");
+  }
 
   std::vector<float> clamped;
   const float* pixels = src->data.data();

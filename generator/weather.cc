@@ -15,7 +15,6 @@
 #include "generator/lens/lens_stage.h"
 #include "generator/stages.h"
 
-#include <OpenImageIO/imageio.h>
 #include "generator/weather_spec.h"
 
 namespace weathergs {
@@ -51,18 +50,13 @@ std::string clean_image_path(const Dataset& d, const std::string& view) {
   throw InputError(a, "no clean image for view '" + view + "' (looked in clean/ and images/)");
 }
 
-// Float EXR layer, byte-reproducible: OpenEXR stamps the write time as capDate unless DateTime is
-// set; core's write_image does not (yet) clear it, so the generator writes its layers itself.
+// Float EXR layer (core's writer is byte-reproducible: no write-time stamp).
 void write_layer_exr(const std::string& path, const Image& img) {
-  OIIO::ImageSpec spec(img.width, img.height, img.channels, OIIO::TypeDesc::FLOAT);
-  if (img.channels == 1) spec.channelnames = {"Y"};
-  spec.attribute("compression", "zip");
-  spec.attribute("DateTime", "");
-  write_file_atomic_with(path, [&](const std::string& tmp) {
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out || !out->open(tmp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, img.data.data()) || !out->close())
-      throw InputError(path, "cannot write the layer: " + (out ? out->geterror() : OIIO::geterror()));
-  });
+  Image layer = img;
+  layer.space = ColorSpace::kLinear;
+  ImageWriteOptions options{PixelFormat::kFloat32, {}};
+  if (img.channels == 1) options.channel_names = {"Y"};
+  write_image(path, layer, options);
 }
 
 void copy_tree(const fs::path& from, const fs::path& to) {

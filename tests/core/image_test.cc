@@ -57,6 +57,18 @@ TEST(ImageTest, ExrIsLinearAndDepthChannelZ) {
   for (size_t i = 0; i < depth.data.size(); ++i) EXPECT_EQ(back.data[i], depth.data[i]);
 }
 
+TEST(ImageTest, SameImageSameBytes) {
+  TempDir dir;
+  Image img(5, 4, 3, ColorSpace::kLinear, 0.25f);
+  write_image(dir / "a.exr", img);
+  write_image(dir / "b.exr", img);
+  EXPECT_EQ(read_file(dir / "a.exr"), read_file(dir / "b.exr"));
+  Image png(5, 4, 3, ColorSpace::kSRGB, 0.25f);
+  write_image(dir / "a.png", png);
+  write_image(dir / "b.png", png);
+  EXPECT_EQ(read_file(dir / "a.png"), read_file(dir / "b.png"));
+}
+
 TEST(ImageTest, NonFiniteExrIsAClearError) {
   TempDir dir;
   Image img(2, 2, 3, ColorSpace::kLinear, 0.5f);
