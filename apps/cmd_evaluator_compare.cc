@@ -1,5 +1,4 @@
 // weathergs compare A B: PSNR / SSIM / LPIPS of one image pair.
-#include <cmath>
 #include <cstdio>
 
 #include "apps/command.h"
@@ -25,16 +24,7 @@ int run_compare(const CompareArgs& args) {
   evaluator::MetricValues m = evaluator::score_pair(a, b, o, lpips.get(), args.mask.empty() ? nullptr : &mask,
                                                     args.a + " vs " + args.b);
   if (args.json) {
-    Json j;
-    if (std::isinf(m.psnr)) {
-      j["psnr"] = nullptr;
-      j["psnr_infinite"] = true;
-    } else {
-      j["psnr"] = m.psnr;
-    }
-    j["ssim"] = m.ssim;
-    j["lpips"] = m.lpips ? Json(*m.lpips) : Json(nullptr);
-    std::printf("%s\n", j.dump().c_str());
+    std::printf("%s\n", evaluator::metrics_to_json(m).dump().c_str());
   } else {
     std::printf("PSNR  %s dB\nSSIM  %s\nLPIPS %s\n", evaluator::format_metric(m.psnr, 4).c_str(),
                 evaluator::format_metric(m.ssim, 6).c_str(),

@@ -29,7 +29,6 @@ MetricValues mean_metrics(const std::vector<std::pair<std::string, MetricValues>
   return m;
 }
 
-namespace {
 Json metrics_to_json(const MetricValues& m) {
   Json j;
   if (std::isinf(m.psnr)) {
@@ -42,6 +41,8 @@ Json metrics_to_json(const MetricValues& m) {
   j["lpips"] = m.lpips ? Json(*m.lpips) : Json(nullptr);
   return j;
 }
+
+namespace {
 
 MetricValues metrics_from_json(const JsonReader& r) {
   if (!r.is_object()) throw InputError(r.where(), "expected an object with psnr, ssim, lpips");

@@ -45,6 +45,8 @@ struct Results {
 // Mean of per-view values (PSNR averaged per view, as 3DGS reports it; +inf if any view is +inf).
 MetricValues mean_metrics(const std::vector<std::pair<std::string, MetricValues>>& per_view);
 
+// {"psnr", "ssim", "lpips"} (+ "psnr_infinite": true when PSNR is +inf, with "psnr": null).
+Json metrics_to_json(const MetricValues& m);
 Json results_to_json(const Results& r);
 Results results_from_json(const JsonReader& reader);
 Results read_results(const std::string& path);
