@@ -12,7 +12,7 @@ PACKAGES=(
   nlohmann-json3-dev libtbb-dev libcli11-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   # scene rendering and structure from motion
-  blender colmap
+  blender colmap sqlite3
   # reference checks (scikit-image SSIM reference values, plots)
   python3-numpy python3-skimage python3-matplotlib
 )
