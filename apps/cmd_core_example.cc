@@ -88,7 +88,7 @@ int run_example(const ExampleArgs& a) {
         cam.exposure_s = 1.0 / 60;
         ds.cameras.push_back(cam);
         Image clean = clean_view(int(s), v, a.width, a.height);
-        write_image(ds.path("clean", n), clean);
+        write_image(ds.path(ImageKind::kClean, n), clean);
         // Toy weather for images/: bright vertical streaks (the real generator is `weathergs weather`).
         Rng rng(a.seed, 1, uint64_t(s * 1000 + v) * 2 + (weather == "snow"));
         for (int k = 0; k < 25; ++k) {
@@ -97,7 +97,7 @@ int run_example(const ExampleArgs& a) {
           for (int y = y0; y < std::min(a.height, y0 + len); ++y)
             for (int c = 0; c < 3; ++c) clean.at(x, y, c) = 0.5f * clean.at(x, y, c) + 0.5f;
         }
-        write_image(ds.path("images", n), clean);
+        write_image(ds.path(ImageKind::kImages, n), clean);
       }
       ds.info.name = name;
       ds.info.scene = scenes[s];
@@ -110,7 +110,7 @@ int run_example(const ExampleArgs& a) {
         fs::create_directories(dir);
         for (const std::string& v : ds.info.splits.at("test")) {
           Rng rng(a.seed, 2, uint64_t(s * 100000 + m * 1000) + uint64_t(std::stoi(v)));
-          write_image((dir / (v + ".png")).string(), degrade(read_image(ds.path("clean", v)), methods[m], rng));
+          write_image((dir / (v + ".png")).string(), degrade(read_image(ds.path(ImageKind::kClean, v)), methods[m], rng));
         }
         write_file_atomic((dir / "info.json").string(),
                           Json{{"method", methods[m]}, {"train_seconds", 0}, {"iterations", 0}}.dump(2) + "\n");

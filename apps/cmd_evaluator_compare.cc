@@ -17,7 +17,7 @@ struct CompareArgs {
 int run_compare(const CompareArgs& args) {
   evaluator::ScoringOptions o = args.scoring.options();
   std::unique_ptr<evaluator::Lpips> lpips;
-  if (o.lpips) lpips = std::make_unique<evaluator::Lpips>(evaluator::find_lpips_model(o.lpips_model));
+  if (o.lpips) lpips = std::make_unique<evaluator::Lpips>(evaluator::find_lpips_model(o.lpips_model_search));
   Image a = read_image(args.a), b = read_image(args.b);
   Image mask;
   if (!args.mask.empty()) mask = read_mask(args.mask);

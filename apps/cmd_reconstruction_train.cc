@@ -10,20 +10,25 @@ namespace {
 
 struct TrainArgs {
   recon::TrainRunOptions run;
+  std::string images = "images", masks = "none";
   std::vector<double> background;
   CLI::App* app = nullptr;
 };
 
 int run_train(TrainArgs& args) {
   recon::TrainRunOptions o = args.run;
+  o.inputs.images = recon::parse_train_images(args.images, "--images");
+  o.inputs.masks = recon::parse_train_masks(args.masks, "--masks");
   if (o.resume) {
     // Start from what the run was trained with; explicitly given flags must agree (checked below
     // through the checkpoint) or extend nothing silently.
     recon::TrainRunOptions stored = recon::read_run_options(o.out);
     auto given = [&](const char* flag) { return args.app->count(flag) > 0; };
     if (!given("--data")) o.dataset = stored.dataset;
-    if (!given("--images")) o.images = stored.images;
-    if (!given("--masks")) o.masks = stored.masks;
+    if (!given("--images")) o.inputs.images = stored.inputs.images;
+    if (!given("--images-dir")) o.inputs.images_dir = stored.inputs.images_dir;
+    if (!given("--masks")) o.inputs.masks = stored.inputs.masks;
+    if (!given("--masks-dir")) o.inputs.masks_dir = stored.inputs.masks_dir;
     if (!given("--iterations")) o.train.iterations = stored.train.iterations;
     if (!given("--seed")) o.train.seed = stored.train.seed;
     if (!given("--background")) o.train.background = stored.train.background;
@@ -64,10 +69,14 @@ Command make_train(CLI::App& root) {
   args->app = sub;
   recon::TrainRunOptions& o = args->run;
   sub->add_option("--data", o.dataset, "Dataset folder (dataset.json, cameras.json, images/)");
-  sub->add_option("--images", o.images, "Training images: images, clean, or a folder of <view>.png")
-      ->capture_default_str();
-  sub->add_option("--masks", o.masks, "Loss masks: none, lens (masks/lens), or a folder of <view>.png (255 = ignore)")
-      ->capture_default_str();
+  sub->add_option("--images", args->images, "Training images of the dataset: images (with weather) or clean")
+      ->capture_default_str()->check(CLI::IsMember({"images", "clean"}));
+  sub->add_option("--images-dir", o.inputs.images_dir, "Train on <DIR>/<view>.png instead (e.g. filtered images)");
+  sub->add_option("--masks", args->masks,
+                  "Ground-truth loss masks of the dataset: none, lens (masks/lens), particles (masks/particles), "
+                  "all (either)")
+      ->capture_default_str()->check(CLI::IsMember({"none", "lens", "particles", "all"}));
+  sub->add_option("--masks-dir", o.inputs.masks_dir, "Loss masks from <DIR>/<view>.png instead (255 = ignore)");
   sub->add_option("--iterations", o.train.iterations, "Training iterations")->capture_default_str()
       ->check(CLI::PositiveNumber);
   sub->add_option("--seed", o.train.seed, "Random seed (view order, splits, random init)")->capture_default_str();

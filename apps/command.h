@@ -8,7 +8,8 @@
 //   } }
 //   WGS_REGISTER_COMMAND(compare, make_compare)
 //
-// Exit codes (docs/cli.md): 0 success, 1 a check failed, 2 bad input or usage, 3 internal error.
+// Exit codes (README.md, docs/architecture.md): 0 success, 1 a check failed, 2 bad input, usage or
+// environment, 3 internal error (a broken invariant), 4 a computation diverged.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -17,7 +18,7 @@
 
 namespace weathergs::cli {
 
-constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2, kExitInternal = 3;
+constexpr int kExitOk = 0, kExitCheckFailed = 1, kExitBadInput = 2, kExitInternal = 3, kExitDiverged = 4;
 
 struct Command {
   CLI::App* app = nullptr;

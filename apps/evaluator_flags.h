@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "apps/resources.h"
 #include "evaluator/evaluate.h"
 
 namespace weathergs::cli {
@@ -18,7 +19,8 @@ struct ScoringFlags {
   void add_to(CLI::App* app) {
     app->add_flag("--no-lpips", no_lpips, "Skip LPIPS (recorded as lpips: null in the protocol)");
     app->add_option("--lpips-model", lpips_model,
-                    "LPIPS ONNX model (file or folder); default: $WEATHERGS_LPIPS_MODEL, then ../shared/models/lpips");
+                    "LPIPS ONNX model (file or folder); default: $WEATHERGS_LPIPS_MODEL, then the install's "
+                    "share/weathergs/models/lpips, then ../shared/models/lpips");
     app->add_option("--ssim-padding", ssim_padding,
                     "SSIM border convention: valid (scikit-image, default) or same (zero padding, 3DGS)")
         ->check(CLI::IsMember({"valid", "same"}));
@@ -29,7 +31,7 @@ struct ScoringFlags {
     evaluator::ScoringOptions o;
     o.lpips = !no_lpips;
     o.quantize_uint8 = !no_quantize;
-    if (!lpips_model.empty()) o.lpips_model = lpips_model;
+    if (o.lpips) o.lpips_model_search = lpips_model_search(lpips_model);
     o.ssim.padding = ssim_padding == "same" ? evaluator::SsimPadding::kSame : evaluator::SsimPadding::kValid;
     return o;
   }

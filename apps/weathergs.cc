@@ -1,9 +1,14 @@
 // The `weathergs` binary: global flags, subcommand dispatch and the mapping of errors to exit codes.
+#include <fmt/core.h>
+
 #include <cstdio>
+#include <filesystem>
 #include <map>
+#include <new>
 
 #include "apps/command.h"
 #include "core/error.h"
+#include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 
@@ -23,12 +28,52 @@ bool register_command(const char* name, CommandFactory factory) {
 
 }  // namespace weathergs::cli
 
+namespace {
+// Runs the parsed command and maps what it throws to the documented exit codes (docs/architecture.md):
+// bad input and environment problems are 2, a diverged computation 4, broken invariants 3.
+int run_command(std::vector<weathergs::cli::Command>& commands) {
+  using namespace weathergs;
+  using namespace weathergs::cli;
+  try {
+    for (Command& c : commands)
+      if (c.app->parsed()) return c.run();
+    return kExitBadInput;
+  } catch (const InputError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitBadInput;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // An unwritable output, a full disk, a missing folder: the environment, not a bug.
+    std::string paths = e.path1().string();
+    if (!e.path2().empty()) paths += ", " + e.path2().string();
+    fmt::print(stderr, "error: {}: {}\n", paths.empty() ? "file system" : paths, e.code().message());
+    return kExitBadInput;
+  } catch (const nlohmann::json::exception& e) {
+    // Library code parses JSON through JsonReader; this catches a malformed document read elsewhere.
+    fmt::print(stderr, "error: malformed JSON: {}\n", e.what());
+    return kExitBadInput;
+  } catch (const std::bad_alloc&) {
+    fmt::print(stderr, "error: out of memory (reduce the resolution, the number of views or of Gaussians)\n");
+    return kExitBadInput;
+  } catch (const NumericalDivergence& e) {
+    fmt::print(stderr, "diverged: {}\n", e.what());
+    return kExitDiverged;
+  } catch (const InternalError& e) {
+    fmt::print(stderr, "internal error (please report): {}\n", e.what());
+    return kExitInternal;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "internal error (please report): unexpected {}\n", e.what());
+    return kExitInternal;
+  }
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace weathergs;
   using namespace weathergs::cli;
   CLI::App app{"weathergs: synthetic adverse-weather benchmarks for 3D reconstruction, the WeatherGS "
                "pipeline, and evaluation against clean ground truth.\n"
-               "Exit codes: 0 ok, 1 a check failed, 2 bad input or usage, 3 internal error."};
+               "Exit codes: 0 ok, 1 a check failed, 2 bad input, usage or environment, 3 internal error, "
+               "4 a computation diverged (e.g. training)."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "weathergs 0.1.0");
   bool quiet = false;
@@ -59,18 +104,5 @@ int main(int argc, char** argv) {
   }
   set_quiet(quiet);
   set_num_threads(threads);
-  try {
-    for (Command& c : commands)
-      if (c.app->parsed()) return c.run();
-    return kExitBadInput;
-  } catch (const InputError& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitBadInput;
-  } catch (const InternalError& e) {
-    std::fprintf(stderr, "internal error (please report): %s\n", e.what());
-    return kExitInternal;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return kExitInternal;
-  }
+  return run_command(commands);
 }

@@ -46,8 +46,8 @@ const Scene& scene() {
     const Dataset d = read_dataset(dir);
     Scene sc;
     sc.camera = d.cameras[0];
-    sc.clean = to_linear(read_image(d.path("clean", sc.camera.name)));
-    sc.depth = read_depth(d.path("depth", sc.camera.name, ".exr"));
+    sc.clean = to_linear(read_image(d.path(ImageKind::kClean, sc.camera.name)));
+    sc.depth = read_depth(d.path(ImageKind::kDepth, sc.camera.name));
     const auto sky = estimate_sky_radiance(sc.clean);
     sc.env = make_environment_light(sc.clean, Eigen::Vector3f(float(sky[0]), float(sky[1]), float(sky[2])));
     std::filesystem::remove_all(dir);

@@ -4,9 +4,11 @@
 #
 # Talks to C++ only through files (docs/scenes.md, "Blender job files"):
 #   in : JOB.json  {"scene": {...}, "scene_file": "...", "surface": {...}, "lights": {...},
-#                   "render": {...}, "camera": {...}, "markers": [...], "output_dir": "..."}
-#   out: <output_dir>/clean/<view>.png       8-bit sRGB (view transform "Standard")
-#        <output_dir>/depth_raw/<view>.exr   planar camera z, float32, R=G=B, background 65504 (EEVEE)
+#                   "render": {...}, "camera": {... "clip_start_m", "clip_end_m"}, "markers": [...],
+#                   "outputs": {"images": IMG, "depth": DEPTH}, "output_dir": "..."}
+#   out: <output_dir>/IMG/<view>.png         8-bit sRGB (view transform "Standard")
+#        <output_dir>/DEPTH/<view>.exr       planar camera z, float32, R=G=B, background 65504 (EEVEE)
+# Folder names and the clip range come from the job: datagen/blender.cc owns them.
 #        <output_dir>/cameras.json           DATASET_FORMAT.md cameras, recomputed from Blender's camera
 #        <output_dir>/render_log.json        timings and object counts
 #        <output_dir>/error.json             only on failure: {"where": "...", "what": "..."}
@@ -649,7 +651,7 @@ def intrinsics(cam_data, width, height):
     return f, f, width / 2 - cam_data.shift_x * s, height / 2 + cam_data.shift_y * s
 
 
-def setup_render(render, out_dir):
+def setup_render(render, out_dir, depth_dir):
     scene = bpy.context.scene
     scene.render.resolution_x = render["width"]
     scene.render.resolution_y = render["height"]
@@ -687,7 +689,7 @@ def setup_render(render, out_dir):
     comp = nt.nodes.new("CompositorNodeComposite")
     nt.links.new(rl.outputs["Image"], comp.inputs["Image"])
     fo = nt.nodes.new("CompositorNodeOutputFile")
-    fo.base_path = os.path.join(out_dir, "depth_raw")
+    fo.base_path = os.path.join(out_dir, depth_dir)
     fo.format.file_format = "OPEN_EXR"
     fo.format.color_depth = "32"
     fo.format.color_mode = "RGB"
@@ -819,16 +821,17 @@ def run(job):
     cam_data.lens = cam_spec["focal_length_mm"]
     cam_data.shift_x = 0.0
     cam_data.shift_y = 0.0
-    cam_data.clip_start = 0.05
-    cam_data.clip_end = 1000.0
+    cam_data.clip_start = cam_spec["clip_start_m"]
+    cam_data.clip_end = cam_spec["clip_end_m"]
     cam = bpy.data.objects.new("camera", cam_data)
     scene.collection.objects.link(cam)
     scene.camera = cam
 
     render = job["render"]
-    fo = setup_render(render, out_dir)
-    os.makedirs(os.path.join(out_dir, "clean"), exist_ok=True)
-    os.makedirs(os.path.join(out_dir, "depth_raw"), exist_ok=True)
+    image_dir, depth_dir = job["outputs"]["images"], job["outputs"]["depth"]
+    fo = setup_render(render, out_dir, depth_dir)
+    os.makedirs(os.path.join(out_dir, image_dir), exist_ok=True)
+    os.makedirs(os.path.join(out_dir, depth_dir), exist_ok=True)
     t_setup = time.time() - t0
 
     views_out = []
@@ -846,10 +849,10 @@ def run(job):
         if render["engine"] == "cycles":
             scene.cycles.seed = view.get("seed", render["seed"])
         fo.file_slots[0].path = view["name"] + "_"
-        scene.render.filepath = os.path.join(out_dir, "clean", view["name"] + ".png")
+        scene.render.filepath = os.path.join(out_dir, image_dir, view["name"] + ".png")
         bpy.ops.render.render(write_still=True)
-        produced = os.path.join(out_dir, "depth_raw", f"{view['name']}_{frame:04d}.exr")
-        os.replace(produced, os.path.join(out_dir, "depth_raw", view["name"] + ".exr"))
+        produced = os.path.join(out_dir, depth_dir, f"{view['name']}_{frame:04d}.exr")
+        os.replace(produced, os.path.join(out_dir, depth_dir, view["name"] + ".exr"))
         fx, fy, cx, cy = intrinsics(cam_data, W, H)
         views_out.append({"name": view["name"], "width": W, "height": H, "fx": fx, "fy": fy, "cx": cx, "cy": cy,
                           "camera_from_world": opencv_from_blender(cam),

@@ -1,12 +1,50 @@
 # Helpers that keep the layering honest and the test names uniform (COLMAP's CMakeHelper style).
 
-# Which weathergs libraries each part may link. Anything else is a configure error.
+# The parts in build order (a part comes after every part it needs), and the parts each one needs.
+# A part's libraries may link exactly the parts it needs (and core); anything else is a configure
+# error (docs/architecture.md).
+set(WEATHERGS_ALL_PARTS evaluator generator reconstruction datagen)
+set(WEATHERGS_PART_NEEDS_evaluator "")
+set(WEATHERGS_PART_NEEDS_generator "")
+set(WEATHERGS_PART_NEEDS_reconstruction "")
+# datagen makes whole benchmark datasets (Blender, the generator, COLMAP): one layer above the generator.
+set(WEATHERGS_PART_NEEDS_datagen "generator")
+
 set(WEATHERGS_ALLOWED_DEPS_core "")
-set(WEATHERGS_ALLOWED_DEPS_evaluator "weathergs_core")
-set(WEATHERGS_ALLOWED_DEPS_generator "weathergs_core")
-set(WEATHERGS_ALLOWED_DEPS_reconstruction "weathergs_core")
-# pipeline orchestrates whole-benchmark jobs (Blender, the generator, COLMAP): one layer above the parts.
-set(WEATHERGS_ALLOWED_DEPS_pipeline "weathergs_core;weathergs_generator")
+foreach(part IN LISTS WEATHERGS_ALL_PARTS)
+  set(WEATHERGS_ALLOWED_DEPS_${part} "weathergs_core")
+  foreach(need IN LISTS WEATHERGS_PART_NEEDS_${part})
+    list(APPEND WEATHERGS_ALLOWED_DEPS_${part} weathergs_${need})
+  endforeach()
+endforeach()
+
+# weathergs_resolve_parts(OUT requested...): the requested parts plus everything they need, in build
+# order. Unknown part names are configure errors.
+function(weathergs_resolve_parts out)
+  set(wanted ${ARGN})
+  set(changed TRUE)
+  while(changed)
+    set(changed FALSE)
+    foreach(part IN LISTS wanted)
+      if(NOT part IN_LIST WEATHERGS_ALL_PARTS)
+        message(FATAL_ERROR "WEATHERGS_PARTS: unknown part '${part}' (known: ${WEATHERGS_ALL_PARTS})")
+      endif()
+      foreach(need IN LISTS WEATHERGS_PART_NEEDS_${part})
+        if(NOT need IN_LIST wanted)
+          list(APPEND wanted ${need})
+          set(changed TRUE)
+        endif()
+      endforeach()
+    endforeach()
+  endwhile()
+  set(ordered "")
+  foreach(part IN LISTS WEATHERGS_ALL_PARTS)
+    if(part IN_LIST wanted)
+      list(APPEND ordered ${part})
+    endif()
+  endforeach()
+  set(${out} ${ordered} PARENT_SCOPE)
+endfunction()
 
 # weathergs_add_library(PART part SOURCES ... [DEPS weathergs_x ...] [EXTERNAL ...])
 function(weathergs_add_library)
@@ -22,7 +60,7 @@ function(weathergs_add_library)
   # Includes are spelled from the repository root: #include "core/image.h".
   target_include_directories(${target} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(${target} PUBLIC ${ARG_DEPS} ${ARG_EXTERNAL})
-  target_compile_definitions(${target} PUBLIC WEATHERGS_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+  # No source-tree paths in libraries or the binary: data is found through apps/resources.h.
 endfunction()
 
 # weathergs_add_test(NAME part/name SOURCES ... DEPS ... [LABELS ...] [TIMEOUT s])
@@ -34,13 +72,16 @@ function(weathergs_add_test)
   target_link_libraries(${exe} PRIVATE ${ARG_DEPS} GTest::gtest)
   target_include_directories(${exe} PRIVATE ${PROJECT_SOURCE_DIR})
   target_compile_definitions(${exe} PRIVATE
+    WEATHERGS_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
     WEATHERGS_TEST_DATA_DIR="${PROJECT_SOURCE_DIR}/tests/data"
     WEATHERGS_BINARY="$<TARGET_FILE:weathergs>")
   add_test(NAME ${ARG_NAME} COMMAND ${exe})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
-  set_tests_properties(${ARG_NAME} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}")
+  # GTEST_SKIP (a missing tool) makes ctest report the test as skipped, not passed.
+  set_tests_properties(${ARG_NAME} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
+                       SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
   if(TARGET weathergs)
     add_dependencies(${exe} weathergs)
   endif()

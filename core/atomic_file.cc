@@ -50,6 +50,11 @@ void write_file_atomic(const std::string& path, const std::string& contents) {
   });
 }
 
+void copy_tree(const std::string& from, const std::string& to) {
+  fs::create_directories(to);
+  fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+}
+
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open file (missing or unreadable)");
@@ -65,7 +70,9 @@ AtomicDirectory::AtomicDirectory(const std::string& final_path) : final_path_(fi
   if (!fs::exists(p.parent_path()))
     throw InputError(final_path, "parent directory " + p.parent_path().string() + " does not exist");
   tmp_path_ = final_path_ + unique_suffix();
-  fs::create_directories(tmp_path_);
+  std::error_code ec;
+  fs::create_directories(tmp_path_, ec);
+  if (ec) throw InputError(final_path, "cannot create the output folder here: " + ec.message());
 }
 
 AtomicDirectory::~AtomicDirectory() {

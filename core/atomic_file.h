@@ -12,6 +12,9 @@ namespace weathergs {
 void write_file_atomic_with(const std::string& path, const std::function<void(const std::string&)>& write);
 void write_file_atomic(const std::string& path, const std::string& contents);
 
+// Copies the folder `from` into `to` recursively (created if needed; existing files are overwritten).
+void copy_tree(const std::string& from, const std::string& to);
+
 // Reads a whole file; InputError if missing or unreadable.
 std::string read_file(const std::string& path);
 

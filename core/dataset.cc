@@ -12,18 +12,56 @@ namespace fs = std::filesystem;
 const Camera& Dataset::camera(const std::string& view) const {
   for (const Camera& c : cameras)
     if (c.name == view) return c;
-  throw InputError(root + "/cameras.json", "no view named '" + view + "'");
+  throw InputError(file(layout::kCamerasJson), "no view named '" + view + "'");
 }
 
 const std::vector<std::string>& Dataset::split(const std::string& name) const {
   auto it = info.splits.find(name);
   if (it == info.splits.end())
-    throw InputError(root + "/dataset.json:/splits", "no split named '" + name + "'");
+    throw InputError(file(layout::kDatasetJson) + ":/splits", "no split named '" + name + "'");
   return it->second;
 }
 
-std::string Dataset::path(const std::string& folder, const std::string& view, const std::string& ext) const {
-  return (fs::path(root) / folder / (view + ext)).string();
+const char* folder_of(ImageKind kind) {
+  switch (kind) {
+    case ImageKind::kImages: return layout::kImagesDir;
+    case ImageKind::kClean: return layout::kCleanDir;
+    case ImageKind::kDepth: return layout::kDepthDir;
+    case ImageKind::kLensMask: return layout::kLensMaskDir;
+    case ImageKind::kParticleMask: return layout::kParticleMaskDir;
+  }
+  WGS_CHECK(false);
+}
+
+const char* extension_of(ImageKind kind) { return kind == ImageKind::kDepth ? layout::kDepthExt : layout::kImageExt; }
+
+const char* to_string(ImageKind kind) {
+  switch (kind) {
+    case ImageKind::kImages: return "images";
+    case ImageKind::kClean: return "clean";
+    case ImageKind::kDepth: return "depth";
+    case ImageKind::kLensMask: return "lens_mask";
+    case ImageKind::kParticleMask: return "particle_mask";
+  }
+  WGS_CHECK(false);
+}
+
+std::string Dataset::path(ImageKind kind, const std::string& view) const {
+  return (fs::path(root) / folder_of(kind) / (view + extension_of(kind))).string();
+}
+
+std::string Dataset::dir(ImageKind kind) const { return (fs::path(root) / folder_of(kind)).string(); }
+
+std::string Dataset::layer_path(const std::string& name, const std::string& view, const std::string& ext) const {
+  return (fs::path(root) / layout::kLayersDir / name / (view + ext)).string();
+}
+
+std::string Dataset::file(const std::string& relative) const { return (fs::path(root) / relative).string(); }
+
+bool Dataset::has(ImageKind kind) const { return fs::is_directory(dir(kind)); }
+
+std::string Dataset::clean_or_input_path(const std::string& view) const {
+  return path(has(ImageKind::kClean) ? ImageKind::kClean : ImageKind::kImages, view);
 }
 
 std::map<std::string, std::vector<std::string>> llff_splits(const std::vector<std::string>& views, int every) {
@@ -168,9 +206,9 @@ Dataset read_dataset(const std::string& root) {
   if (!fs::is_directory(root)) throw InputError(root, "dataset directory does not exist");
   Dataset d;
   d.root = root;
-  d.info = read_dataset_json((fs::path(root) / "dataset.json").string());
-  d.cameras = read_cameras_json((fs::path(root) / "cameras.json").string());
-  validate_dataset(d, (fs::path(root) / "dataset.json").string());
+  d.info = read_dataset_json((fs::path(root) / layout::kDatasetJson).string());
+  d.cameras = read_cameras_json((fs::path(root) / layout::kCamerasJson).string());
+  validate_dataset(d, (fs::path(root) / layout::kDatasetJson).string());
   return d;
 }
 
@@ -186,8 +224,8 @@ void write_dataset_json(const std::string& path, const DatasetInfo& info) {
 
 void write_dataset(const Dataset& d) {
   validate_dataset(d, d.root);
-  write_cameras_json((fs::path(d.root) / "cameras.json").string(), d.cameras);
-  write_dataset_json((fs::path(d.root) / "dataset.json").string(), d.info);
+  write_cameras_json((fs::path(d.root) / layout::kCamerasJson).string(), d.cameras);
+  write_dataset_json((fs::path(d.root) / layout::kDatasetJson).string(), d.info);
 }
 
 }  // namespace weathergs

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/dataset_layout.h"
 #include "core/image.h"
 #include "core/json_reader.h"
 
@@ -31,8 +32,19 @@ struct Dataset {
 
   const Camera& camera(const std::string& view) const;  // InputError if unknown
   const std::vector<std::string>& split(const std::string& name) const;  // InputError if absent
-  // "<root>/<folder>/<view><ext>", e.g. path("images", "007") -> ".../images/007.png".
-  std::string path(const std::string& folder, const std::string& view, const std::string& ext = ".png") const;
+  // "<root>/<folder of kind>/<view><ext of kind>", e.g. path(ImageKind::kImages, "007") -> ".../images/007.png".
+  std::string path(ImageKind kind, const std::string& view) const;
+  // "<root>/<folder of kind>".
+  std::string dir(ImageKind kind) const;
+  // "<root>/layers/<name>/<view><ext>": a float layer (or a per-view text manifest) of the generator.
+  std::string layer_path(const std::string& name, const std::string& view, const std::string& ext = layout::kDepthExt) const;
+  // "<root>/<relative>", e.g. file(layout::kSparseModelDir).
+  std::string file(const std::string& relative) const;
+  // Whether the folder of `kind` exists.
+  bool has(ImageKind kind) const;
+  // The clean image of a view: clean/<view>.png when the dataset has clean/, else images/<view>.png
+  // (a clear dataset, or imported footage without ground truth).
+  std::string clean_or_input_path(const std::string& view) const;
 };
 
 // The default split rule (LLFF / 3DGS): 0-based index % 8 == 0 is a test view.

@@ -3,6 +3,7 @@
 //    the file, the place inside it (a JSON pointer, a view name) and what was expected.
 //  * WGS_CHECK*: internal invariants (programmer mistakes). Throws InternalError with both operands,
 //    so a host process can still report it; the CLI maps it to exit code 3.
+//  * NumericalDivergence: valid input on which a numerical process stopped being finite (exit 4).
 #pragma once
 
 #include <sstream>
@@ -26,6 +27,13 @@ class InputError : public std::runtime_error {
 class InternalError : public std::logic_error {
  public:
   using std::logic_error::logic_error;
+};
+
+// A numerical process stopped being finite on valid input (e.g. a diverged training): neither bad
+// input nor a broken invariant, so the CLI gives it its own exit code (4, docs/architecture.md).
+class NumericalDivergence : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 namespace detail {

@@ -188,7 +188,7 @@ Image read_depth(const std::string& path) {
     if (std::isnan(z))
       throw InputError(path, "NaN depth at pixel (" + std::to_string(p % raw.width) + ", " +
                                  std::to_string(p / raw.width) + ")");
-    depth.data[p] = z;  // +inf and >= 1e9 are background by contract; keep them as they are
+    depth.data[p] = z;  // is_background_depth (core/dataset_layout.h): kept as they are
   }
   return depth;
 }

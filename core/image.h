@@ -69,7 +69,8 @@ struct ImageWriteOptions {
 // (clamped); a linear image is converted to sRGB first. EXR output is written as is.
 void write_image(const std::string& path, const Image& img, const ImageWriteOptions& options = {});
 
-// Planar depth (camera z, meters) from an EXR: channel "Z", else R. Background >= 1e9 or +inf.
+// Planar depth (camera z, meters) from an EXR: channel "Z", else R. Background: is_background_depth
+// (core/dataset_layout.h: >= 1e9 or +inf).
 Image read_depth(const std::string& path);
 void write_depth(const std::string& path, const Image& depth);
 // 8-bit single-channel mask: returns 1 channel with values in {0,1} (>= 128 counts as set).

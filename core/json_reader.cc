@@ -90,4 +90,58 @@ void JsonReader::finish() const {
   if (!unknown.empty()) throw InputError(where(), "unknown key(s) " + unknown);
 }
 
+namespace detail {
+std::string format_number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+void out_of_bounds(const std::string& where, const std::string& what, double lo, double hi, double v) {
+  std::string rule = what;
+  if (lo > -JsonReader::kHuge || hi < JsonReader::kHuge)
+    rule += " in [" + (lo > -JsonReader::kHuge ? format_number(lo) : "-inf") + ", " +
+            (hi < JsonReader::kHuge ? format_number(hi) : "inf") + "]";
+  else
+    rule = "a finite " + what.substr(what.rfind(' ') + 1);
+  throw InputError(where, "expected " + rule + ", got " + format_number(v));
+}
+}  // namespace detail
+
+double JsonReader::get_number(const std::string& key, double lo, double hi) const {
+  const double v = get<double>(key);
+  if (!(v >= lo && v <= hi)) detail::out_of_bounds(where(key), "a number", lo, hi, v);
+  return v;
+}
+
+double JsonReader::get_number_or(const std::string& key, double fallback, double lo, double hi) const {
+  if (!has(key) || (*value_)[key].is_null()) {
+    mark(key);
+    return fallback;
+  }
+  return get_number(key, lo, hi);
+}
+
+std::array<double, 2> JsonReader::get_range_or(const std::string& key, const std::array<double, 2>& fallback,
+                                               double lo, double hi) const {
+  if (!has(key) || (*value_)[key].is_null()) {
+    mark(key);
+    return fallback;
+  }
+  if ((*value_)[key].is_number()) {
+    const double v = get_number(key, lo, hi);
+    return {v, v};
+  }
+  mark(key);
+  const Json& v = (*value_)[key];
+  if (!v.is_array() || v.size() != 2)
+    throw InputError(where(key), "expected a number or [min, max], got " + detail::json_type_name(v));
+  JsonReader a = child(key);
+  const std::array<double, 2> r = get_array<2>(key, lo, hi);
+  if (!(r[0] <= r[1]))
+    throw InputError(a.where(), "expected [min, max] with min <= max, got [" + detail::format_number(r[0]) + ", " +
+                                    detail::format_number(r[1]) + "]");
+  return r;
+}
+
 }  // namespace weathergs

@@ -5,9 +5,17 @@
 //   double fx = r.get<double>("fx");                 // required
 //   int n = r.get_or<int>("count", 60);              // optional with a default
 //   JsonReader views = r.child("views");             // object or array
+//   double x = r.get_number_or("rate_mm_h", 25, 0, 500);           // bounded, finite
+//   auto wind = r.get_array_or<3>("wind_m_s", {0, 0, 0});          // fixed-size numeric array
+//   auto radius = r.get_range_or("radius_mm", {0.5, 3.0});         // x or [min, max]
+//   Mode m = r.get_enum_or("mode", Mode::kA, {Mode::kA, Mode::kB}); // by to_string(Mode)
 //   r.finish();                                       // throws on unknown keys
+//
+// Every helper words its errors the same way: "<file>:<pointer>: expected <rule>, got <value>".
 #pragma once
 
+#include <array>
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
@@ -53,6 +61,29 @@ class JsonReader {
   template <typename T>
   T as() const;
 
+  // Bounded numbers: finite and within [lo, hi] (InputError otherwise).
+  double get_number(const std::string& key, double lo, double hi) const;
+  double get_number_or(const std::string& key, double fallback, double lo, double hi) const;
+  // Arrays of exactly N finite numbers, each within [lo, hi].
+  template <size_t N>
+  std::array<double, N> get_array(const std::string& key, double lo = -kHuge, double hi = kHuge) const;
+  template <size_t N>
+  std::array<double, N> get_array_or(const std::string& key, const std::array<double, N>& fallback,
+                                     double lo = -kHuge, double hi = kHuge) const {
+    return has(key) && !(*value_)[key].is_null() ? get_array<N>(key, lo, hi) : (mark(key), fallback);
+  }
+  // A range: a number x (meaning [x, x]) or [min, max] with min <= max, finite, within [lo, hi].
+  std::array<double, 2> get_range_or(const std::string& key, const std::array<double, 2>& fallback,
+                                     double lo = -kHuge, double hi = kHuge) const;
+  // An enum spelled as a string: one of to_string(v) for v in `values`.
+  template <typename E>
+  E get_enum(const std::string& key, std::initializer_list<E> values) const;
+  template <typename E>
+  E get_enum_or(const std::string& key, E fallback, std::initializer_list<E> values) const {
+    return has(key) && !(*value_)[key].is_null() ? get_enum<E>(key, values) : (mark(key), fallback);
+  }
+  static constexpr double kHuge = 1.0e300;
+
   JsonReader child(const std::string& key) const;   // required object/array member
   JsonReader at(size_t index) const;                // array element
   std::vector<std::string> keys() const;            // object keys, marking none
@@ -73,6 +104,34 @@ class JsonReader {
 
 namespace detail {
 std::string json_type_name(const Json& j);
+std::string format_number(double v);
+// The one wording of a bounded-value error: "expected <what> in [lo, hi], got v".
+[[noreturn]] void out_of_bounds(const std::string& where, const std::string& what, double lo, double hi, double v);
+}
+
+template <size_t N>
+std::array<double, N> JsonReader::get_array(const std::string& key, double lo, double hi) const {
+  JsonReader a = child(key);
+  if (!a.is_array() || a.size() != N)
+    throw InputError(a.where(), "expected an array of " + std::to_string(N) + " numbers, got " +
+                                    (a.is_array() ? std::to_string(a.size()) + " elements" : detail::json_type_name(a.value())));
+  std::array<double, N> out{};
+  for (size_t i = 0; i < N; ++i) {
+    out[i] = a.at(i).as<double>();
+    if (!(out[i] >= lo && out[i] <= hi)) detail::out_of_bounds(a.at(i).where(), "a number", lo, hi, out[i]);
+  }
+  return out;
+}
+
+template <typename E>
+E JsonReader::get_enum(const std::string& key, std::initializer_list<E> values) const {
+  const std::string s = get<std::string>(key);
+  std::string allowed;
+  for (E v : values) {
+    if (s == to_string(v)) return v;
+    allowed += (allowed.empty() ? "\"" : ", \"") + std::string(to_string(v)) + "\"";
+  }
+  throw InputError(where(key), "expected one of " + allowed + ", got \"" + s + "\"");
 }
 
 template <typename T>

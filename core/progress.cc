@@ -6,6 +6,10 @@
 
 namespace weathergs {
 
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
 namespace {
 std::atomic<bool> g_quiet{false};
 }

@@ -10,6 +10,9 @@
 
 namespace weathergs {
 
+// Wall-clock seconds elapsed since t (steady clock).
+double seconds_since(std::chrono::steady_clock::time_point t);
+
 void set_quiet(bool quiet);
 bool is_quiet();
 

@@ -7,8 +7,9 @@
 namespace weathergs::evaluator {
 
 void CheckTolerances::validate() const {
-  for (auto [name, v] : {std::pair<const char*, double>{"--psnr-tol", psnr}, {"--ssim-tol", ssim}, {"--lpips-tol", lpips}})
-    if (!(std::isfinite(v) && v >= 0)) throw InputError(name, "tolerance must be a finite number >= 0");
+  for (auto [name, v] : {std::pair<const char*, double>{"psnr", psnr}, {"ssim", ssim}, {"lpips", lpips}})
+    if (!(std::isfinite(v) && v >= 0))
+      throw InputError("check tolerances", std::string(name) + " is " + std::to_string(v) + ", must be a finite number >= 0");
 }
 
 namespace {
@@ -38,8 +39,8 @@ std::string signed_delta(double d, int decimals) {
 CheckReport check_regression(const std::vector<LoadedResults>& baseline, const std::vector<LoadedResults>& current,
                              const CheckTolerances& tol) {
   tol.validate();
-  if (baseline.empty()) throw InputError("--baseline", "no baseline results given");
-  if (current.empty()) throw InputError("--results", "no results given");
+  if (baseline.empty()) throw InputError("baseline", "no baseline results given");
+  if (current.empty()) throw InputError("results", "no results given");
   const auto base = by_dataset(baseline, "baseline");
   const auto cur = by_dataset(current, "new");
 

@@ -52,13 +52,24 @@ std::string hash_files(const std::vector<std::string>& views, const std::vector<
 
 }  // namespace
 
+void EvaluateOptions::validate() const {
+  const std::string where = "evaluate options";
+  if (gt_dataset.empty()) throw InputError(where, "gt_dataset is empty: the dataset folder is required");
+  if (renders_dir.empty()) throw InputError(where, "renders_dir is empty: the renders folder is required");
+  if (split.empty()) throw InputError(where, "split is empty");
+  if (ground_truth != ImageKind::kClean && ground_truth != ImageKind::kImages)
+    throw InputError(where, std::string("ground_truth is ") + to_string(ground_truth) + ": must be clean or images");
+}
+
 Results evaluate(const EvaluateOptions& o) {
+  o.validate();
   const Dataset ds = read_dataset(o.gt_dataset);
   const std::vector<std::string>& views = ds.split(o.split);
-  if (views.empty()) throw InputError(o.gt_dataset + "/dataset.json:/splits/" + o.split, "split is empty");
-  if (!fs::is_directory(fs::path(o.gt_dataset) / o.gt_folder))
-    throw InputError(o.gt_dataset, "no " + o.gt_folder + "/ folder: this dataset has no clean ground truth "
-                                       "(imported real footage cannot be scored)");
+  if (views.empty()) throw InputError(ds.file(layout::kDatasetJson) + ":/splits/" + o.split, "split is empty");
+  if (!ds.has(o.ground_truth))
+    throw InputError(ds.dir(o.ground_truth), std::string("no ") + folder_of(o.ground_truth) +
+                                                 "/ folder: this dataset has no clean ground truth "
+                                                 "(imported real footage cannot be scored)");
   if (!fs::is_directory(o.renders_dir)) throw InputError(o.renders_dir, "renders directory does not exist");
 
   // Renders must be exactly the split's views.
@@ -96,12 +107,12 @@ Results evaluate(const EvaluateOptions& o) {
   if (o.mask_dir) r.protocol.mask = fs::path(*o.mask_dir).lexically_normal().filename().string();
 
   std::unique_ptr<Lpips> lpips;
-  if (o.scoring.lpips) lpips = std::make_unique<Lpips>(find_lpips_model(o.scoring.lpips_model));
+  if (o.scoring.lpips) lpips = std::make_unique<Lpips>(find_lpips_model(o.scoring.lpips_model_search));
 
   std::vector<std::string> render_paths, gt_paths;
   for (const auto& v : views) {
     render_paths.push_back((fs::path(o.renders_dir) / (v + ".png")).string());
-    gt_paths.push_back(ds.path(o.gt_folder, v));
+    gt_paths.push_back(ds.path(o.ground_truth, v));
   }
   std::vector<MetricValues> values(views.size());
   ProgressBar bar("evaluate " + r.method, int64_t(views.size()));

@@ -3,7 +3,9 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
+#include "core/dataset_layout.h"
 #include "core/image.h"
 #include "evaluator/lpips.h"
 #include "evaluator/metrics.h"
@@ -16,7 +18,7 @@ struct ScoringOptions {
   bool quantize_uint8 = true;  // quantize both images to 8-bit sRGB first (as NerfBaselines does)
   SsimOptions ssim;            // default: 11x11 Gaussian, sigma 1.5, valid padding
   bool lpips = true;           // false: skipped explicitly (--no-lpips), recorded as lpips: null
-  std::optional<std::string> lpips_model;  // --lpips-model; else env / default search (lpips.h)
+  std::vector<std::string> lpips_model_search;  // where to look for the model, in order (lpips.h)
 };
 
 // Scores one pair (sRGB or linear, any 1..4 channels: converted to RGB sRGB first). `lpips` may be
@@ -29,9 +31,13 @@ struct EvaluateOptions {
   std::string renders_dir;     // <renders>/<view>.png for every view of the split (+ optional info.json)
   std::string method;          // empty: taken from <renders>/info.json "method"
   std::string split = "test";
-  std::string gt_folder = "clean";  // ground truth images inside the dataset
+  ImageKind ground_truth = ImageKind::kClean;  // which of the dataset's image folders is the truth
   std::optional<std::string> mask_dir;  // masks (255 = exclude) named <view>.png
   ScoringOptions scoring;
+
+  // InputError naming the field and the rule (gt_dataset, renders_dir, split required; ground truth
+  // must be an image kind: clean or images).
+  void validate() const;
 };
 
 // Scores every view of the split in parallel. Missing or extra renders, unreadable images, size

@@ -12,7 +12,7 @@ TableFormat parse_table_format(const std::string& name) {
   if (name == "csv") return TableFormat::kCsv;
   if (name == "latex" || name == "tex") return TableFormat::kLatex;
   if (name == "html") return TableFormat::kHtml;
-  throw InputError("--format", "unknown table format '" + name + "' (expected md, csv, latex or html)");
+  throw InputError("table format", "unknown table format '" + name + "' (expected md, csv, latex or html)");
 }
 
 namespace {

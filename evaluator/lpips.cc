@@ -3,7 +3,6 @@
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
 
-#include <cstdlib>
 #include <filesystem>
 
 #include "evaluator/metrics.h"
@@ -22,30 +21,18 @@ std::optional<std::string> as_model_file(const std::string& p) {
 }
 }  // namespace
 
-std::string find_lpips_model(const std::optional<std::string>& explicit_path) {
-  if (explicit_path) {
-    if (auto f = as_model_file(*explicit_path)) return *f;
-    throw InputError(*explicit_path, std::string("LPIPS model not found: expected ") + kLpipsModelFile +
-                                         " or a folder containing it");
-  }
-  if (const char* env = std::getenv(kLpipsEnvVar); env && *env) {
-    if (auto f = as_model_file(env)) return *f;
-    throw InputError(env, std::string("LPIPS model named by ") + kLpipsEnvVar + " not found: expected " +
-                              kLpipsModelFile + " or a folder containing it");
-  }
-  std::vector<std::string> candidates = {
-      (fs::path(WEATHERGS_SOURCE_DIR) / ".." / "shared" / "models" / "lpips").lexically_normal().string(),
-      "shared/models/lpips", "../shared/models/lpips"};
+std::string find_lpips_model(const std::vector<std::string>& candidates) {
   std::string searched;
   for (const std::string& c : candidates) {
     if (auto f = as_model_file(c)) return *f;
     searched += "\n  " + c;
   }
-  throw InputError("lpips", std::string("cannot find the LPIPS model ") + kLpipsModelFile +
-                                ". Searched:" + searched +
-                                "\nProvide it with --lpips-model PATH or the environment variable " +
-                                kLpipsEnvVar + " (the weights are in ../shared/models/lpips of the "
-                                "project checkout), or skip LPIPS explicitly with --no-lpips.");
+  throw InputError(candidates.size() == 1 ? candidates.front() : std::string("lpips"),
+                   std::string("cannot find the LPIPS model ") + kLpipsModelFile + ". Searched:" +
+                       (searched.empty() ? std::string(" nothing") : searched) +
+                       "\nProvide it with --lpips-model PATH or the environment variable WEATHERGS_LPIPS_MODEL "
+                       "(the weights are in ../shared/models/lpips of the project checkout), or skip LPIPS "
+                       "explicitly with --no-lpips.");
 }
 
 struct Lpips::Impl {

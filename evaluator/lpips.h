@@ -1,9 +1,9 @@
 // LPIPS v0.1 (Zhang et al. 2018) with the AlexNet trunk, run through OpenCV's dnn module from the
 // ONNX export in ../shared/models/lpips (see that README for the exact conventions).
 //
-// Model lookup, in order: an explicit path (--lpips-model), the environment variable
-// WEATHERGS_LPIPS_MODEL, then default locations: <source tree>/../shared/models/lpips,
-// ./shared/models/lpips and ../shared/models/lpips. A path may name the .onnx file or its folder.
+// The model is found by find_lpips_model over a list of candidate paths that the caller builds (the
+// `weathergs` binary: --lpips-model, $WEATHERGS_LPIPS_MODEL, its data directories, ../shared/models/lpips;
+// apps/resources.h). A path may name the .onnx file or its folder.
 #pragma once
 
 #include <memory>
@@ -17,14 +17,13 @@
 namespace weathergs::evaluator {
 
 constexpr const char* kLpipsModelFile = "lpips_alex_v0.1.onnx";
-constexpr const char* kLpipsEnvVar = "WEATHERGS_LPIPS_MODEL";
 // Smallest side AlexNet-LPIPS can score: conv1 (11x11, stride 4, pad 2) and two 3x3/2 max-pools
 // need an input of at least 31 pixels.
 constexpr int kLpipsMinSide = 31;
 
-// Returns the model file to use. Throws InputError listing every path searched and how to provide
-// the model when none exists.
-std::string find_lpips_model(const std::optional<std::string>& explicit_path);
+// Returns the model file of the first candidate that holds it (the .onnx file or a folder with it).
+// Throws InputError listing every path searched and how to provide the model when none does.
+std::string find_lpips_model(const std::vector<std::string>& candidates);
 
 class Lpips {
  public:

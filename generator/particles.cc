@@ -4,13 +4,13 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/constants.h"
 #include "core/error.h"
 #include "core/rng.h"
 
 namespace weathergs {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 // Streams of the generator's Rng keys (core/rng.h): one per (species, class) and one per wind.
 constexpr uint64_t kStreamParticles = 0x5041525400000000ull;  // "PART"
 constexpr uint64_t kStreamWind = 0x57494e4400000000ull;       // "WIND"

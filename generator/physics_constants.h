@@ -4,6 +4,8 @@
 // otherwise.
 #pragma once
 
+#include "core/constants.h"
+
 namespace weathergs::physics {
 
 // Marshall & Palmer (1948), J. Meteor. 5:165, "The distribution of raindrops with size":
@@ -56,6 +58,6 @@ constexpr double kGravity_m_s2 = 9.80665;
 
 // Rain rate from a drop-size distribution: R = 6e-4 pi Int N(D) D^3 v(D) dD  [mm/h]
 // = 3.6e6 (mm/h per m/s) * 1e-9 (m^3 per mm^3) * pi/6 (sphere volume / D^3).
-constexpr double kRainRateFactor = 6e-4 * 3.14159265358979323846;
+constexpr double kRainRateFactor = 6e-4 * kPi;
 
 }  // namespace weathergs::physics

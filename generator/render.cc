@@ -4,14 +4,17 @@
 #include <atomic>
 #include <cmath>
 #include <memory>
+#include <opencv2/imgproc.hpp>
 
+#include "core/constants.h"
 #include "core/error.h"
 #include "core/parallel.h"
 
 namespace weathergs {
 
+const char* to_string(StreakMode mode) { return mode == StreakMode::kAnalytic ? "analytic" : "time_samples"; }
+
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kBandRows = 8;  // rows per band of the parallel rasterizer
 
 struct PixelAlpha {
@@ -150,23 +153,6 @@ void RenderOptions::validate(const std::string& where) const {
     bad("max_distance_m must be in (near_m, 10000], got " + std::to_string(max_distance_m));
 }
 
-double ThinLens::coc_radius_px(double fx, double z) const {
-  if (!(z > 0)) return 0;
-  // CoC diameter on the sensor: A f |z - s| / (z (s - f)); in pixels * fx / f.
-  return 0.5 * fx * aperture_m * std::abs(z - focus_m) / (z * (focus_m - focal_length_m));
-}
-
-std::optional<ThinLens> thin_lens_of(const Camera& c) {
-  if (!c.f_number || !c.focal_length_mm || !c.focus_distance_m) return std::nullopt;
-  ThinLens lens;
-  lens.focal_length_m = *c.focal_length_mm / 1000.0;
-  lens.aperture_m = lens.focal_length_m / *c.f_number;
-  lens.focus_m = *c.focus_distance_m;
-  if (!(lens.focus_m > lens.focal_length_m))
-    throw InputError("view '" + c.name + "'", "focus_distance_m must exceed the focal length");
-  return lens;
-}
-
 double visibility_distance_m(double f_px, double r_m, double a0, const RenderOptions& options) {
   const double d = f_px * r_m * std::sqrt(kPi * a0 / options.visibility_cutoff);
   return std::min(d, options.max_distance_m);
@@ -177,13 +163,15 @@ EnvironmentLight make_environment_light(const Image& img, const Eigen::Vector3f&
   WGS_CHECK_GE(img.channels, 3);
   const int w = img.width, h = img.height;
   const int radius = std::max(1, std::max(w, h) / 4);
-  // Summed-area table in double: exact enough for any image size here, and order-fixed.
-  std::vector<double> sat(size_t(w + 1) * (h + 1) * 3, 0.0);
-  auto at = [&](int x, int y, int c) -> double& { return sat[(size_t(y) * (w + 1) + x) * 3 + c]; };
+  // Summed-area table in double (OpenCV's integral image): exact enough for any image size here, and
+  // single-threaded, so order-fixed.
+  cv::Mat rgb(h, w, CV_32FC3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
-      for (int c = 0; c < 3; ++c)
-        at(x + 1, y + 1, c) = img.at(x, y, c) + at(x, y + 1, c) + at(x + 1, y, c) - at(x, y, c);
+      for (int c = 0; c < 3; ++c) rgb.ptr<float>(y)[x * 3 + c] = img.at(x, y, c);
+  cv::Mat sat;
+  cv::integral(rgb, sat, CV_64F);
+  auto at = [&](int x, int y, int c) { return sat.ptr<double>(y)[x * 3 + c]; };
   EnvironmentLight env;
   env.sky = sky;
   env.wide = Image(w, h, 3, ColorSpace::kLinear);

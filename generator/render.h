@@ -21,11 +21,13 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/thin_lens.h"
 #include "core/image.h"
 
 namespace weathergs {
 
 enum class StreakMode { kAnalytic, kTimeSamples };
+const char* to_string(StreakMode mode);  // "analytic", "time_samples" (the spec's spelling)
 
 // Quality knobs of the particle renderer (the spec's "render" block).
 struct RenderOptions {
@@ -41,13 +43,6 @@ struct RenderOptions {
   void validate(const std::string& where) const;
 };
 
-// Thin lens of a camera (all three optional fields present), in meters.
-struct ThinLens {
-  double focal_length_m = 0, aperture_m = 0, focus_m = 0;
-  // Circle-of-confusion radius in pixels at planar depth z: fx A f |z - s| / (2 z (s - f)) / f.
-  double coc_radius_px(double fx, double z) const;
-};
-std::optional<ThinLens> thin_lens_of(const Camera& camera);
 
 // Depth at which a particle of visual radius r_m and peak alpha a0 stops being visible without
 // motion blur or defocus (both only lower its peak alpha): its mass a0 pi (f r / z)^2 in one pixel

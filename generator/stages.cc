@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/constants.h"
+#include "core/dataset_layout.h"
 #include "core/error.h"
 #include "core/parallel.h"
 
@@ -30,7 +32,7 @@ void FogStage::run(WeatherView& v) const {
     for (int x = 0; x < cam.width; ++x) {
       const double z = v.depth.at(x, y);
       double tr = 1.0;
-      if (!(z < kBackgroundDepth_m)) {
+      if (is_background_depth(z)) {
         tr = beta_ > 0 ? 0.0 : 1.0;
       } else if (z > 0) {
         const double nx = (x + 0.5 - cam.cx) / cam.fx, ny = (y + 0.5 - cam.cy) / cam.fy;
@@ -57,7 +59,7 @@ double relative_speed_bound_m_s(const ParticleField& field, int k) {
   const SpeciesOptions& o = field.options();
   return std::abs(o.fall_speed_m_s(cls.hi_mm) - o.fall_speed_m_s(cls.lo_mm)) +
          kGustSigmas * std::sqrt(3.0) * o.wind.turbulence_rms_m_s +
-         (o.species == Species::kSnow ? o.flutter_amplitude_m[1] * 2 * M_PI * o.flutter_frequency_hz[1] : 0.0);
+         (o.species == Species::kSnow ? o.flutter_amplitude_m[1] * 2 * kPi * o.flutter_frequency_hz[1] : 0.0);
 }
 
 std::vector<CellIndex> visible_cells(const ParticleField& field, int k, const Camera& cam, double near,
@@ -166,7 +168,7 @@ double population_distance_m(const ParticleField& field, int k, const RenderView
   const double vp = 0.9 * v_perp - own;
   if (!(vp > 0)) return still;
   // Point kernel: peak <= 1.5 m / L with m = pi a0 (f r / z)^2 and L = f vp T / z.
-  const double d_point = 1.5 * M_PI * f * r * r * a0 / (vp * exposure * options.visibility_cutoff);
+  const double d_point = 1.5 * kPi * f * r * r * a0 / (vp * exposure * options.visibility_cutoff);
   // Disk kernel (R >= 0.5 px, z <= 2 f r): peak <= a0 2R / L = 2 a0 r / (vp T), for any z.
   const double d_disk = 2 * a0 * r / (vp * exposure) >= options.visibility_cutoff ? 2 * f * r : 0.0;
   return std::min(still, std::max(d_point, d_disk));

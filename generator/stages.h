@@ -19,10 +19,6 @@
 
 namespace weathergs {
 
-// Planar depths at or beyond this are background (DATASET_FORMAT.md says >= 1e9 or +inf; Blender's
-// EEVEE writes 65504, the largest half float).
-constexpr float kBackgroundDepth_m = 65504.0f;
-
 // One view passing through the stages.
 struct WeatherView {
   // Starts with radiance = clean and zero particle alpha; every other member default-initialized.

@@ -24,6 +24,9 @@ namespace fs = std::filesystem;
 namespace {
 constexpr const char* kGeneratorVersion = "weathergs-generator 1";
 constexpr double kSkyFraction = 0.005;  // brightest 0.5% of the pixels
+// The keys of dataset.json's generator block that the weather stage owns.
+constexpr const char* kWeatherKeys[] = {"version", "seed", "spec", "sky_radiance", "counters",
+                                        "outputs", "airlight", "lens_droplets"};
 
 double luminance(const Image& img, size_t p) {
   return 0.2126 * img.data[p * img.channels] + 0.7152 * img.data[p * img.channels + 1] +
@@ -44,10 +47,9 @@ std::vector<std::unique_ptr<WeatherStage>> make_stages(const WeatherSpec& spec, 
 }
 
 std::string clean_image_path(const Dataset& d, const std::string& view) {
-  const std::string a = d.path("clean", view), b = d.path("images", view);
-  if (fs::exists(a)) return a;
-  if (fs::exists(b)) return b;
-  throw InputError(a, "no clean image for view '" + view + "' (looked in clean/ and images/)");
+  const std::string p = d.clean_or_input_path(view);
+  if (!fs::exists(p)) throw InputError(p, "no clean image for view '" + view + "'");
+  return p;
 }
 
 // Float EXR layer (core's writer is byte-reproducible: no write-time stamp).
@@ -59,10 +61,6 @@ void write_layer_exr(const std::string& path, const Image& img) {
   write_image(path, layer, options);
 }
 
-void copy_tree(const fs::path& from, const fs::path& to) {
-  fs::create_directories(to);
-  fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
-}
 }  // namespace
 
 void WeatherRunOptions::validate() const {
@@ -137,7 +135,9 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
 
   AtomicDirectory out(out_dir);
   const fs::path root(out.path());
-  for (const char* d : {"images", "clean", "depth"}) fs::create_directories(root / d);
+  Dataset result;
+  result.root = root.string();
+  for (ImageKind k : {ImageKind::kImages, ImageKind::kClean, ImageKind::kDepth}) fs::create_directories(result.dir(k));
 
   const size_t n_views = cameras.size();
   std::vector<std::vector<double>> seconds(n_views, std::vector<double>(stages.size(), 0.0));
@@ -153,7 +153,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
     if (clean_img.width != cam.width || clean_img.height != cam.height)
       throw InputError(src, "image is " + clean_img.to_string() + " but cameras.json says " +
                                 std::to_string(cam.width) + "x" + std::to_string(cam.height));
-    const std::string depth_path = clean.path("depth", cam.name, ".exr");
+    const std::string depth_path = clean.path(ImageKind::kDepth, cam.name);
     if (!fs::exists(depth_path)) throw InputError(depth_path, "the weather generator needs the clean depth");
     const Image depth = read_depth(depth_path);
     if (depth.width != cam.width || depth.height != cam.height)
@@ -166,30 +166,31 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
       seconds[i][s] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     require_finite(view.radiance, "internal: weathered view '" + cam.name + "'");
-    write_image((root / "images" / (cam.name + ".png")).string(), view.radiance);
-    if (fs::path(src).extension() == ".png") fs::copy_file(src, root / "clean" / (cam.name + ".png"));
-    else write_image((root / "clean" / (cam.name + ".png")).string(), clean_img);
-    fs::copy_file(depth_path, root / "depth" / (cam.name + ".exr"));
+    write_image(result.path(ImageKind::kImages, cam.name), view.radiance);
+    if (fs::path(src).extension() == layout::kImageExt) fs::copy_file(src, result.path(ImageKind::kClean, cam.name));
+    else write_image(result.path(ImageKind::kClean, cam.name), clean_img);
+    fs::copy_file(depth_path, result.path(ImageKind::kDepth, cam.name));
     if (view.has_particles) {
-      fs::create_directories(root / "masks" / "particles");
-      write_mask((root / "masks" / "particles" / (cam.name + ".png")).string(), view.particle_alpha,
-                 float(options.mask_threshold));
+      fs::create_directories(result.dir(ImageKind::kParticleMask));
+      write_mask(result.path(ImageKind::kParticleMask, cam.name), view.particle_alpha, float(options.mask_threshold));
       view.layers["particle_alpha"] = view.particle_alpha;
     }
     if (view.lens_mask) {
-      fs::create_directories(root / "masks" / "lens");
-      write_mask((root / "masks" / "lens" / (cam.name + ".png")).string(), *view.lens_mask);
+      fs::create_directories(result.dir(ImageKind::kLensMask));
+      write_mask(result.path(ImageKind::kLensMask, cam.name), *view.lens_mask);
       lens_drops[i] = std::move(view.lens_drops);
     }
     if (options.write_layers)
       for (const auto& [name, img] : view.layers) {
-        fs::create_directories(root / "layers" / name);
-        write_layer_exr((root / "layers" / name / (cam.name + ".exr")).string(), img);
+        const std::string path = result.layer_path(name, cam.name);
+        fs::create_directories(fs::path(path).parent_path());
+        write_layer_exr(path, img);
         layer_names[i].insert(name);
       }
     for (const auto& [name, text] : view.texts) {
-      fs::create_directories(root / "layers" / name);
-      write_file_atomic((root / "layers" / name / (cam.name + ".csv")).string(), text);
+      const std::string path = result.layer_path(name, cam.name, ".csv");
+      fs::create_directories(fs::path(path).parent_path());
+      write_file_atomic(path, text);
       text_names[i].insert(name);
     }
     counters[i] = view.counters;
@@ -197,9 +198,13 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
   });
   progress.finish();
 
-  const fs::path in_root(clean_dir);
-  if (fs::is_directory(in_root / "sparse")) copy_tree(in_root / "sparse", root / "sparse");
-  if (fs::exists(in_root / "transforms.json")) fs::copy_file(in_root / "transforms.json", root / "transforms.json");
+  // The input's exports describe the same cameras: carried over unless the caller makes its own.
+  if (options.copy_exports) {
+    const fs::path in_root(clean_dir);
+    if (fs::is_directory(in_root / layout::kSparseDir)) copy_tree(in_root / layout::kSparseDir, root / layout::kSparseDir);
+    if (fs::exists(in_root / layout::kTransformsJson))
+      fs::copy_file(in_root / layout::kTransformsJson, root / layout::kTransformsJson);
+  }
 
   // The generator block: sums in view (cameras.json) order.
   Json stage_list = Json::array();
@@ -215,20 +220,23 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
     layers.insert(layer_names[i].begin(), layer_names[i].end());
     texts.insert(text_names[i].begin(), text_names[i].end());
   }
-  Json block = {{"version", kGeneratorVersion},
-                {"seed", spec.seed},
-                {"spec", spec.to_json()},
-                {"stages", stage_list},
-                {"sky_radiance", {sky[0], sky[1], sky[2]}},
-                {"counters", total_counters},
-                {"outputs", {{"mask_threshold", options.mask_threshold},
-                             {"float_layers", layers},
-                             {"manifests", texts}}}};
+  // One straight line: the stages before this one (e.g. datagen's Blender render) keep their entries;
+  // the weather adds its own keys and appends its stages. Re-weathering a weathered dataset replaces
+  // the weather's keys only.
+  Json block = clean.info.generator && clean.info.generator->is_object() ? *clean.info.generator : Json::object();
+  Json stages_before = block.contains("stages") && block["stages"].is_array() ? block["stages"] : Json::array();
+  for (const char* key : kWeatherKeys) block.erase(key);
+  block["version"] = kGeneratorVersion;
+  block["seed"] = spec.seed;
+  block["spec"] = spec.to_json();
+  for (const Json& st : stage_list) stages_before.push_back(st);
+  block["stages"] = stages_before;
+  block["sky_radiance"] = {sky[0], sky[1], sky[2]};
+  block["counters"] = total_counters;
+  block["outputs"] = {{"mask_threshold", options.mask_threshold}, {"float_layers", layers}, {"manifests", texts}};
   if (spec.fog) block["airlight"] = {airlight[0], airlight[1], airlight[2]};
   if (spec.lens_droplets) block["lens_droplets"] = {{"views", lens_drops}};  // cameras.json order
 
-  Dataset result;
-  result.root = root.string();
   result.cameras = cameras;
   result.info.name = options.name.empty() ? clean.info.name + "_" + spec.weather_name() : options.name;
   result.info.scene = clean.info.scene;

@@ -8,12 +8,13 @@
 // AtomicDirectory; a failed run leaves nothing at out_dir):
 //   images/<view>.png           the weathered views (8-bit sRGB)
 //   clean/<view>.png            the clean views, copied
-//   depth/<view>.exr            copied; sparse/ and transforms.json copied when present
+//   depth/<view>.exr            copied; sparse/ and transforms.json copied when present (copy_exports)
 //   masks/particles/<view>.png  particle alpha >= mask_threshold (when a particle effect ran)
 //   layers/particle_alpha/<view>.exr, layers/<species>_alpha/<view>.exr, layers/fog_transmittance/
 //   layers/particles_<species>/<view>.csv   the per-particle manifest (docs/generator.md)
 //   cameras.json                the cameras with the spec's camera overrides applied
-//   dataset.json                splits copied; generator = the returned block
+//   dataset.json                splits copied; generator = the input's block (if any) plus the
+//                               weather's entries (the returned block)
 // Every output but the measured seconds in dataset.json is byte-identical for the same inputs and
 // seed, whatever the thread count or view order.
 #pragma once
@@ -37,14 +38,17 @@ struct WeatherRunOptions {
   bool write_layers = true;              // layers/*.exr (float alpha, fog transmittance)
   bool write_manifest = true;            // layers/particles_<species>/<view>.csv
   double mask_threshold = 0.02;          // masks/particles: particle alpha >= this, in (0, 1]
+  bool copy_exports = true;              // copy the input's sparse/ and transforms.json (false when the
+                                         // caller writes its own, as datagen's generate does)
 
   void validate() const;  // InputError naming the field
 };
 
 // Reads the clean dataset, applies the spec, writes a complete dataset at out_dir atomically
-// (AtomicDirectory), returns the "generator" block written to dataset.json:
-//   {"version", "seed", "spec" (resolved, every default filled in), "stages": [{"name", "seconds"}],
-//    "sky_radiance": [r, g, b], "counters": {...}, "outputs": {...}}.
+// (AtomicDirectory), returns the "generator" block written to dataset.json: the input dataset's
+// block (entries of earlier stages, e.g. datagen's render) plus the weather's own entries
+//   {"version", "seed", "spec" (resolved, every default filled in), "stages": [... earlier stages,
+//    {"name", "seconds"} per weather stage], "sky_radiance": [r, g, b], "counters": {...}, "outputs": {...}}.
 // The spec may be part of a larger document: errors name spec.file() and spec.pointer().
 Json run_weather(const std::string& clean_dataset_dir, const JsonReader& spec, const std::string& out_dir,
                  const WeatherRunOptions& options);

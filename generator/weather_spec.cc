@@ -14,28 +14,13 @@ namespace {
 constexpr double kDefaultTurbulenceIntensity = 0.25;
 
 Eigen::Vector3d read_vec3(const JsonReader& r, const std::string& key, const Eigen::Vector3d& fallback) {
-  if (!r.has(key)) {
-    r.mark(key);
-    return fallback;
-  }
-  JsonReader a = r.child(key);
-  if (!a.is_array() || a.size() != 3) throw InputError(a.where(), "expected an array of 3 numbers");
-  Eigen::Vector3d v;
-  for (size_t i = 0; i < 3; ++i) v[int(i)] = a.at(i).as<double>();
-  if (!v.allFinite()) throw InputError(a.where(), "expected finite numbers");
-  return v;
+  const std::array<double, 3> v = r.get_array_or<3>(key, {fallback[0], fallback[1], fallback[2]});
+  return {v[0], v[1], v[2]};
 }
 
 void read_range(const JsonReader& r, const std::string& key, double out[2]) {
-  if (!r.has(key)) {
-    r.mark(key);
-    return;
-  }
-  JsonReader a = r.child(key);
-  if (!a.is_array() || a.size() != 2) throw InputError(a.where(), "expected [min, max]");
-  out[0] = a.at(0).as<double>();
-  out[1] = a.at(1).as<double>();
-  if (!(out[0] <= out[1])) throw InputError(a.where(), "expected min <= max");
+  const std::array<double, 2> v = r.get_range_or(key, {out[0], out[1]});
+  out[0] = v[0], out[1] = v[1];
 }
 
 ParticleEffectSpec parse_particles(const JsonReader& r, Species species) {
@@ -153,7 +138,7 @@ Json WeatherSpec::to_json() const {
   return {{"seed", seed},
           {"camera", cam},
           {"render",
-           {{"streak", render.streak == StreakMode::kAnalytic ? "analytic" : "time_samples"},
+           {{"streak", to_string(render.streak)},
             {"segments", render.segments},
             {"time_samples", render.time_samples},
             {"visibility_cutoff", render.visibility_cutoff},
@@ -195,10 +180,8 @@ WeatherSpec parse_weather_spec(const JsonReader& r) {
   if (r.has("render")) {
     JsonReader q = r.child("render");
     if (!q.is_object()) throw InputError(q.where(), "expected an object");
-    const std::string streak = q.get_or<std::string>("streak", "analytic");
-    if (streak == "analytic") spec.render.streak = StreakMode::kAnalytic;
-    else if (streak == "time_samples") spec.render.streak = StreakMode::kTimeSamples;
-    else throw InputError(q.where("streak"), "expected \"analytic\" or \"time_samples\", got \"" + streak + "\"");
+    spec.render.streak =
+        q.get_enum_or("streak", spec.render.streak, {StreakMode::kAnalytic, StreakMode::kTimeSamples});
     spec.render.segments = q.get_or<int>("segments", spec.render.segments);
     spec.render.time_samples = q.get_or<int>("time_samples", spec.render.time_samples);
     spec.render.visibility_cutoff = q.get_or<double>("visibility_cutoff", spec.render.visibility_cutoff);

@@ -2,13 +2,13 @@
 
 #include <cmath>
 
+#include "core/constants.h"
 #include "core/error.h"
 #include "core/rng.h"
 
 namespace weathergs {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector3d uniform_unit_vector(Rng& rng) {
   const double z = 2.0 * rng.uniform_double() - 1.0;

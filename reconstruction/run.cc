@@ -7,6 +7,7 @@
 #include "core/colmap_model.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/progress.h"
 
 namespace weathergs::recon {
 
@@ -15,26 +16,20 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* kRunFormat = "weathergs-3dgs-run";
-constexpr int kRunVersion = 1;
+// 2: images/masks as named choices plus images_dir/masks_dir (1 mixed folder paths into the names).
+constexpr int kRunVersion = 2;
 
-std::string view_file(const Dataset& d, const std::string& choice, const std::string& view,
-                      const std::vector<std::string>& named_folders) {
-  for (const std::string& f : named_folders)
-    if (choice == f) return d.path(f == "lens" ? "masks/lens" : f, view);
-  return (fs::path(choice) / (view + ".png")).string();
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
+Json optional_path(const std::string& p) { return p.empty() ? Json(nullptr) : Json(p); }
 
 Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool complete, const std::string& init) {
   return Json{{"format", kRunFormat},
               {"version", kRunVersion},
               {"complete", complete},
               {"dataset", fs::absolute(o.dataset).lexically_normal().string()},
-              {"images", o.images},
-              {"masks", o.masks},
+              {"images", to_string(o.inputs.images)},
+              {"images_dir", optional_path(o.inputs.images_dir)},
+              {"masks", to_string(o.inputs.masks)},
+              {"masks_dir", optional_path(o.inputs.masks_dir)},
               {"initialization", init},
               {"iterations", t.iteration()},
               {"sh_degree", t.sh_degree()},
@@ -46,7 +41,8 @@ Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool c
 }
 
 struct RunInfo {
-  std::string dataset, images, masks;
+  std::string dataset;
+  TrainInputs inputs;
   int iterations = 0, sh_degree = 0;
   int64_t num_gaussians = 0;
   double train_seconds = 0, peak_rss_mb = 0;
@@ -59,12 +55,16 @@ RunInfo read_run_json(const std::string& run_dir) {
   if (!fs::exists(path)) throw InputError(path, "missing: not a training run folder");
   JsonReader r = JsonReader::from_file(path);
   if (r.get<std::string>("format") != kRunFormat) throw InputError(r.where("format"), std::string("expected ") + kRunFormat);
-  if (r.get<int>("version") != kRunVersion) throw InputError(r.where("version"), "unsupported version");
+  if (const int v = r.get<int>("version"); v != kRunVersion)
+    throw InputError(r.where("version"), "run folder of version " + std::to_string(v) + ", this weathergs reads version " +
+                                             std::to_string(kRunVersion) + ": train it again");
   RunInfo info;
   info.complete = r.get<bool>("complete");
   info.dataset = r.get<std::string>("dataset");
-  info.images = r.get<std::string>("images");
-  info.masks = r.get<std::string>("masks");
+  info.inputs.images = parse_train_images(r.get<std::string>("images"), r.where("images"));
+  info.inputs.images_dir = r.get_optional<std::string>("images_dir").value_or("");
+  info.inputs.masks = parse_train_masks(r.get<std::string>("masks"), r.where("masks"));
+  info.inputs.masks_dir = r.get_optional<std::string>("masks_dir").value_or("");
   r.get<std::string>("initialization");
   info.iterations = r.get<int>("iterations");
   info.sh_degree = r.get<int>("sh_degree");
@@ -80,14 +80,76 @@ RunInfo read_run_json(const std::string& run_dir) {
 
 }  // namespace
 
-std::vector<TrainView> load_train_views(const Dataset& dataset, const std::string& images, const std::string& masks) {
+const char* to_string(TrainImages images) { return images == TrainImages::kClean ? "clean" : "images"; }
+
+const char* to_string(TrainMasks masks) {
+  switch (masks) {
+    case TrainMasks::kNone: return "none";
+    case TrainMasks::kLens: return "lens";
+    case TrainMasks::kParticles: return "particles";
+    case TrainMasks::kAll: return "all";
+  }
+  WGS_CHECK(false);
+}
+
+TrainImages parse_train_images(const std::string& text, const std::string& where) {
+  for (TrainImages v : {TrainImages::kImages, TrainImages::kClean})
+    if (text == to_string(v)) return v;
+  throw InputError(where, "expected \"images\" or \"clean\", got \"" + text + "\"");
+}
+
+TrainMasks parse_train_masks(const std::string& text, const std::string& where) {
+  for (TrainMasks v : {TrainMasks::kNone, TrainMasks::kLens, TrainMasks::kParticles, TrainMasks::kAll})
+    if (text == to_string(v)) return v;
+  throw InputError(where, "expected one of none, lens, particles, all; got \"" + text + "\"");
+}
+
+void TrainInputs::validate(const std::string& where) const {
+  if (!masks_dir.empty() && masks != TrainMasks::kNone)
+    throw InputError(where, std::string("masks is \"") + recon::to_string(masks) + "\" and masks_dir is \"" + masks_dir +
+                                "\": give one source of masks");
+}
+
+std::string TrainInputs::to_string() const {
+  std::string s = images_dir.empty() ? std::string("images ") + recon::to_string(images) : "images_dir " + images_dir;
+  s += masks_dir.empty() ? std::string(", masks ") + recon::to_string(masks) : ", masks_dir " + masks_dir;
+  return s;
+}
+
+void TrainRunOptions::validate() const {
+  if (dataset.empty()) throw InputError("train run options", "dataset is empty: the dataset folder is required");
+  if (out.empty()) throw InputError("train run options", "out is empty: the run folder is required");
+  if (checkpoint_every < 0)
+    throw InputError("train run options", "checkpoint_every is " + std::to_string(checkpoint_every) + ", must be >= 0");
+  inputs.validate("train run options");
+  train.validate("train options");
+}
+
+void RenderRunOptions::validate() const {
+  for (const auto& [field, value] : {std::pair<const char*, const std::string*>{"model", &model}, {"out", &out},
+                                     {"split", &split}, {"method", &method}})
+    if (value->empty()) throw InputError("render options", std::string(field) + " is empty: it is required");
+}
+
+std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInputs& inputs) {
+  inputs.validate("train inputs");
   std::vector<TrainView> views;
   const auto& names = dataset.split("train");
-  if (names.empty()) throw InputError(dataset.root + "/dataset.json:/splits/train", "the train split is empty");
+  if (names.empty()) throw InputError(dataset.file(layout::kDatasetJson) + ":/splits/train", "the train split is empty");
+  auto folder_file = [](const std::string& dir, const std::string& view) {
+    return (fs::path(dir) / (view + layout::kImageExt)).string();
+  };
+  std::vector<ImageKind> mask_kinds;
+  if (inputs.masks == TrainMasks::kLens || inputs.masks == TrainMasks::kAll) mask_kinds.push_back(ImageKind::kLensMask);
+  if (inputs.masks == TrainMasks::kParticles || inputs.masks == TrainMasks::kAll)
+    mask_kinds.push_back(ImageKind::kParticleMask);
   for (const std::string& name : names) {
     TrainView v;
     v.camera = dataset.camera(name);
-    const std::string ipath = view_file(dataset, images, name, {"images", "clean"});
+    const std::string ipath =
+        inputs.images_dir.empty()
+            ? dataset.path(inputs.images == TrainImages::kClean ? ImageKind::kClean : ImageKind::kImages, name)
+            : folder_file(inputs.images_dir, name);
     const Image img = to_rgb(read_image(ipath));
     if (img.width != v.camera.width || img.height != v.camera.height)
       throw InputError(ipath, "image is " + img.to_string() + ", camera '" + name + "' expects " +
@@ -95,13 +157,20 @@ std::vector<TrainView> load_train_views(const Dataset& dataset, const std::strin
     require_finite(img, ipath);
     v.rgb.assign(img.data.begin(), img.data.end());
     for (float& x : v.rgb) x = std::clamp(x, 0.f, 1.f);
-    if (masks != "none") {
-      const std::string mpath = view_file(dataset, masks, name, {"lens"});
+    std::vector<std::string> mask_paths;
+    if (!inputs.masks_dir.empty()) mask_paths.push_back(folder_file(inputs.masks_dir, name));
+    for (ImageKind k : mask_kinds) {
+      const std::string mpath = dataset.path(k, name);
+      // A dataset has masks/particles only where a particle effect ran, masks/lens only with drops.
+      if (!dataset.has(k) && inputs.masks == TrainMasks::kAll) continue;
+      mask_paths.push_back(mpath);
+    }
+    for (const std::string& mpath : mask_paths) {
       const Image m = read_mask(mpath);
       if (m.width != v.camera.width || m.height != v.camera.height)
         throw InputError(mpath, "mask is " + m.to_string() + ", expected the camera's size");
-      v.invalid.resize(m.num_pixels());
-      for (size_t p = 0; p < m.num_pixels(); ++p) v.invalid[p] = m.data[p] > 0.5f ? 1 : 0;
+      v.invalid.resize(m.num_pixels(), 0);
+      for (size_t p = 0; p < m.num_pixels(); ++p) v.invalid[p] |= m.data[p] > 0.5f ? 1 : 0;
     }
     views.push_back(std::move(v));
   }
@@ -109,7 +178,7 @@ std::vector<TrainView> load_train_views(const Dataset& dataset, const std::strin
 }
 
 GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options, std::string* source) {
-  const std::string path = (fs::path(dataset.root) / "sparse/0/points3D.txt").string();
+  const std::string path = (fs::path(dataset.file(layout::kSparseModelDir)) / "points3D.txt").string();
   if (fs::exists(path)) {
     const std::vector<ColmapPoint3D> pts = read_colmap_points3d(path);
     if (!pts.empty()) {
@@ -130,10 +199,9 @@ GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions&
 }
 
 TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_iteration) {
-  o.train.validate("train options");
-  if (o.checkpoint_every < 0) throw InputError("--checkpoint-every", "must be >= 0");
+  o.validate();
   const Dataset dataset = read_dataset(o.dataset);
-  std::vector<TrainView> views = load_train_views(dataset, o.images, o.masks);
+  std::vector<TrainView> views = load_train_views(dataset, o.inputs);
   std::vector<Camera> cams;
   for (const TrainView& v : views) cams.push_back(v.camera);
   const double extent = scene_extent(cams);
@@ -143,7 +211,7 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
                     info = (run / "run.json").string();
   const bool has_run = fs::exists(ckpt) || fs::exists(info);
   if (has_run && !o.resume && !o.force)
-    throw InputError(o.out, "already holds a training run: pass --resume to continue it or --force to start over");
+    throw InputError(o.out, "already holds a training run: resume it or force a new one (train --resume / --force)");
   if (o.resume && !fs::exists(ckpt)) throw InputError(ckpt, "missing: nothing to resume");
   if (o.force && !o.resume)
     for (const std::string& f : {ckpt, ply, info}) fs::remove(f);
@@ -155,10 +223,9 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
   double seconds_before = 0;
   if (o.resume) {
     const RunInfo ri = read_run_json(o.out);
-    if (ri.images != o.images || ri.masks != o.masks ||
-        fs::path(ri.dataset) != fs::absolute(o.dataset).lexically_normal())
-      throw InputError(info, "the run was trained on dataset " + ri.dataset + " with images '" + ri.images +
-                                 "' and masks '" + ri.masks + "': resume with the same inputs");
+    if (!(ri.inputs == o.inputs) || fs::path(ri.dataset) != fs::absolute(o.dataset).lexically_normal())
+      throw InputError(info, "the run was trained on dataset " + ri.dataset + " with " + ri.inputs.to_string() +
+                                 ": resume with the same inputs");
     seconds_before = trainer.load_checkpoint(ckpt);
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -189,14 +256,14 @@ TrainRunOptions read_run_options(const std::string& run_dir) {
   const RunInfo ri = read_run_json(run_dir);
   TrainRunOptions o;
   o.dataset = ri.dataset;
-  o.images = ri.images;
-  o.masks = ri.masks;
+  o.inputs = ri.inputs;
   o.out = run_dir;
   o.train = ri.options;
   return o;
 }
 
 RenderRunResult render_run(const RenderRunOptions& o) {
+  o.validate();
   const RunInfo ri = read_run_json(o.model);
   const GaussianSet<float> g = read_ply((fs::path(o.model) / "point_cloud.ply").string());
   const Dataset dataset = read_dataset(o.dataset.empty() ? ri.dataset : o.dataset);

@@ -1,8 +1,9 @@
 // Whole training and rendering runs on a dataset (what `weathergs train` and `weathergs render` do).
 //
 // A run folder holds:
-//   run.json          {"format": "weathergs-3dgs-run", "version": 1, "complete": bool, "dataset": ...,
-//                      "images": ..., "masks": ..., "iterations": done, "sh_degree": ...,
+//   run.json          {"format": "weathergs-3dgs-run", "version": 2, "complete": bool, "dataset": ...,
+//                      "images": "images"|"clean", "images_dir": path|null, "masks": "none"|"lens"|
+//                      "particles"|"all", "masks_dir": path|null, "iterations": done, "sh_degree": ...,
 //                      "num_gaussians": ..., "train_seconds": ..., "peak_rss_mb": ..., "options": {...}}
 //   point_cloud.ply   the standard 3DGS PLY (written at every checkpoint and at the end)
 //   checkpoint.bin    parameters + Adam state for --resume
@@ -19,19 +20,44 @@
 
 namespace weathergs::recon {
 
+// Which of the dataset's image folders a run trains on.
+enum class TrainImages { kImages, kClean };
+// Which of the dataset's ground-truth masks are excluded from the loss (255 = masked out).
+enum class TrainMasks { kNone, kLens, kParticles, kAll /* lens or particles */ };
+const char* to_string(TrainImages images);
+const char* to_string(TrainMasks masks);
+TrainImages parse_train_images(const std::string& text, const std::string& where);  // InputError
+TrainMasks parse_train_masks(const std::string& text, const std::string& where);
+
+// The images and masks of a run: a dataset folder (by kind) or an outside folder of <view>.png.
+struct TrainInputs {
+  TrainImages images = TrainImages::kImages;
+  std::string images_dir;               // non-empty: <images_dir>/<view>.png instead of `images`
+  TrainMasks masks = TrainMasks::kNone;
+  std::string masks_dir;                // non-empty: <masks_dir>/<view>.png (255 = masked out)
+
+  void validate(const std::string& where) const;  // InputError naming the field and the rule
+  bool operator==(const TrainInputs& o) const {
+    return images == o.images && images_dir == o.images_dir && masks == o.masks && masks_dir == o.masks_dir;
+  }
+  std::string to_string() const;
+};
+
 struct TrainRunOptions {
   std::string dataset;          // dataset root
-  std::string images = "images";  // "images", "clean", or a folder with <view>.png
-  std::string masks = "none";     // "none", "lens", or a folder with <view>.png (255 = masked out)
+  TrainInputs inputs;
   std::string out;              // run folder
   bool resume = false;          // continue from out/checkpoint.bin
   bool force = false;           // start over even if out holds a run
   int checkpoint_every = 1000;  // iterations between checkpoints (0 = only at the end)
   TrainOptions train;
+
+  // InputError naming the field, its value and the rule (dataset and out required, ...).
+  void validate() const;
 };
 
 // Loads the dataset's train-split views with the chosen images and masks. InputError names the file.
-std::vector<TrainView> load_train_views(const Dataset& dataset, const std::string& images, const std::string& masks);
+std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInputs& inputs);
 
 // Initial Gaussians: COLMAP points3D.txt of the dataset when present and non-empty, else random.
 GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options, std::string* source);
@@ -55,6 +81,8 @@ struct RenderRunOptions {
   std::string split = "test";
   std::string out;            // renders folder (replaced atomically)
   std::string method = "3dgs";
+
+  void validate() const;  // InputError naming the field (model, out, split, method must be non-empty)
 };
 
 struct RenderRunResult {

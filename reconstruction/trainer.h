@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/error.h"
 #include "core/json_reader.h"
 #include "reconstruction/gaussians.h"
 #include "reconstruction/loss.h"
@@ -67,9 +68,9 @@ GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, ui
                                double far_m);
 
 // Thrown when a loss or gradient stops being finite; names the parameter, the Gaussian and the step.
-class TrainingDiverged : public std::runtime_error {
+class TrainingDiverged : public NumericalDivergence {
  public:
-  using std::runtime_error::runtime_error;
+  using NumericalDivergence::NumericalDivergence;
 };
 
 struct IterationStats {

@@ -9,10 +9,10 @@ PACKAGES=(
   cmake ninja-build g++ pkg-config
   # C++ libraries
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libembree-dev
-  nlohmann-json3-dev libtbb-dev libcli11-dev libfmt-dev
+  nlohmann-json3-dev libtbb-dev libcli11-dev libfmt-dev libsqlite3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   # scene rendering and structure from motion
-  blender colmap sqlite3
+  blender colmap
   # reference checks (scikit-image SSIM reference values, plots)
   python3-numpy python3-skimage python3-matplotlib
 )

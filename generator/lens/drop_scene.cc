@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 
+#include "core/constants.h"
 #include "core/error.h"
 
 namespace weathergs::lens {
@@ -104,7 +105,7 @@ DropScene::DropScene(const EmbreeDevice& device, const GlassPlane& plane, std::v
     double r = p.sphere_radius;
     // A facet's vertices lie on the sphere; its points are at least R cos(edge angle) from the center.
     if (geometry_ == CapGeometry::kTriangles)
-      r *= std::cos(std::max(2 * M_PI / cap_segments, p.contact_angle_rad / rings));
+      r *= std::cos(std::max(2 * kPi / cap_segments, p.contact_angle_rad / rings));
     inside_radius_.push_back(r);
   }
   scene_ = rtcNewScene(device_.handle());
@@ -242,7 +243,7 @@ void DropScene::add_triangles(int segments) {
     for (int k = 1; k <= rings; ++k) {
       const double phi = p.contact_angle_rad * k / rings;
       for (int s = 0; s < segments; ++s) {
-        const double a = 2 * M_PI * s / segments;
+        const double a = 2 * kPi * s / segments;
         add(std::cos(phi) * plane_.water_normal + std::sin(phi) * (std::cos(a) * e1 + std::sin(a) * e2));
       }
     }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/constants.h"
 #include "core/error.h"
 #include "core/rng.h"
 
@@ -11,7 +12,6 @@ namespace weathergs::lens {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 double clamp_contact(double theta) {
   return std::clamp(theta, kMinContactAngleRad, kPi - kMinContactAngleRad);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "core/constants.h"
+#include "core/thin_lens.h"
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/rng.h"
@@ -13,7 +15,6 @@ namespace weathergs::lens {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 // Blur diameters below one pixel leave the droplet layer as traced.
 constexpr double kMinBlurDiameterPx = 1.0;
 
@@ -134,15 +135,6 @@ uint64_t fnv1a64(const std::string& s) {
   return h;
 }
 
-double circle_of_confusion_px(const Camera& camera, double object_distance_m) {
-  if (!camera.f_number || !camera.focal_length_mm || !camera.focus_distance_m) return 0;
-  const double f = *camera.focal_length_mm * 1e-3, n = *camera.f_number, s1 = *camera.focus_distance_m;
-  const double s2 = object_distance_m;
-  if (!(f > 0 && n > 0 && s1 > f && s2 > 0) || !std::isfinite(s1)) return 0;
-  const double aperture = f / n;
-  return camera.fx * aperture * std::abs(s2 - s1) / (s2 * (s1 - f));
-}
-
 LensDropletRenderer::LensDropletRenderer(const LensDropletSpec& spec, uint64_t seed, const Camera& reference)
     : spec_(spec), seed_(seed) {
   validate_lens_droplet_spec(spec_, "lens_droplets");
@@ -187,7 +179,8 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
       std::nth_element(z.begin(), z.begin() + z.size() / 2, z.end());
       dist = z[z.size() / 2];
     }
-    if (dist > 0) blur = circle_of_confusion_px(camera, dist);
+    const std::optional<ThinLens> lens = thin_lens_of(camera);
+    if (lens && dist > 0) blur = lens->coc_diameter_px(camera.fx, dist);
     if (blur > kMaxBlurDiameterPx) {
       blur = kMaxBlurDiameterPx;
       blur_clipped = true;

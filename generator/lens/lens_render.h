@@ -37,11 +37,6 @@ struct LensViewResult {
   double blur_diameter_px = 0;
 };
 
-// Thin-lens circle of confusion (diameter, pixels) of a point at object_distance_m when the camera
-// focuses at focus_distance_m: c = fx * A * |S2 - S1| / (S2 (S1 - f)), aperture A = f / N
-// (e.g. Hecht, Optics, 5.7; the pixel pitch is f / fx). 0 when the camera has no thin-lens data.
-double circle_of_confusion_px(const Camera& camera, double object_distance_m);
-
 // Largest blur diameter applied (pixels): beyond it the glass is a uniform veil anyway and the
 // kernel cost grows quadratically; recorded in the per-view JSON when it clips.
 constexpr double kMaxBlurDiameterPx = 256;

@@ -14,53 +14,7 @@ const char* to_string(CapGeometry g) { return g == CapGeometry::kAnalytic ? "ana
 
 namespace {
 
-// A number x (meaning [x, x]) or a two-element array [lo, hi].
-std::array<double, 2> read_range(const JsonReader& r, const std::string& key,
-                                 std::array<double, 2> fallback) {
-  if (!r.has(key) || r.value()[key].is_null()) {
-    r.mark(key);
-    return fallback;
-  }
-  if (r.value()[key].is_number()) {
-    double v = r.get<double>(key);
-    return {v, v};
-  }
-  JsonReader a = r.child(key);
-  if (!a.is_array() || a.size() != 2)
-    throw InputError(a.where(), "expected a number or an array [min, max] of two numbers");
-  return {a.at(0).as<double>(), a.at(1).as<double>()};
-}
-
-template <size_t N>
-std::array<double, N> read_vec(const JsonReader& r, const std::string& key, std::array<double, N> fallback) {
-  if (!r.has(key) || r.value()[key].is_null()) {
-    r.mark(key);
-    return fallback;
-  }
-  JsonReader a = r.child(key);
-  if (!a.is_array() || a.size() != N)
-    throw InputError(a.where(), "expected an array of " + std::to_string(N) + " numbers");
-  std::array<double, N> out{};
-  for (size_t i = 0; i < N; ++i) out[i] = a.at(i).as<double>();
-  return out;
-}
-
 Eigen::Vector3d to_vec(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
-
-template <typename E>
-E read_enum(const JsonReader& r, const std::string& key, E fallback, std::initializer_list<E> values) {
-  if (!r.has(key)) {
-    r.mark(key);
-    return fallback;
-  }
-  std::string s = r.get<std::string>(key);
-  std::string allowed;
-  for (E v : values) {
-    if (s == to_string(v)) return v;
-    allowed += (allowed.empty() ? "\"" : ", \"") + std::string(to_string(v)) + "\"";
-  }
-  throw InputError(r.where(key), "expected one of " + allowed + ", got \"" + s + "\"");
-}
 
 std::string num(double v) {
   std::ostringstream s;
@@ -79,24 +33,24 @@ LensDropletSpec parse_lens_droplet_spec(const JsonReader& r) {
   if (!r.is_object()) throw InputError(r.where(), "expected an object (the lens_droplets effect)");
   LensDropletSpec s;
   s.count = r.get_or<int>("count", s.count);
-  s.radius_mm = read_range(r, "radius_mm", s.radius_mm);
-  s.radius_distribution = read_enum(r, "radius_distribution", s.radius_distribution,
+  s.radius_mm = r.get_range_or("radius_mm", s.radius_mm);
+  s.radius_distribution = r.get_enum_or("radius_distribution", s.radius_distribution,
                                     {RadiusDistribution::kLogUniform, RadiusDistribution::kUniform});
-  s.contact_angle_deg = read_range(r, "contact_angle_deg", s.contact_angle_deg);
+  s.contact_angle_deg = r.get_range_or("contact_angle_deg", s.contact_angle_deg);
   s.glass_distance_m = r.get_or<double>("glass_distance_m", s.glass_distance_m);
-  s.attach = read_enum(r, "attach", s.attach, {Attach::kLens, Attach::kWindow});
-  s.drop_side = read_enum(r, "drop_side", s.drop_side, {DropSide::kScene, DropSide::kCamera});
-  s.glass_tilt_deg = read_vec<2>(r, "glass_tilt_deg", s.glass_tilt_deg);
+  s.attach = r.get_enum_or("attach", s.attach, {Attach::kLens, Attach::kWindow});
+  s.drop_side = r.get_enum_or("drop_side", s.drop_side, {DropSide::kScene, DropSide::kCamera});
+  s.glass_tilt_deg = r.get_array_or<2>("glass_tilt_deg", s.glass_tilt_deg);
   if (r.has("window") && !r.value()["window"].is_null()) {
     JsonReader w = r.child("window");
     if (!w.is_object()) throw InputError(w.where(), "expected an object");
     WindowPose p;
-    p.center_world = to_vec(read_vec<3>(w, "center_world", {0, 0, 0}));
+    p.center_world = to_vec(w.get_array_or<3>("center_world", {0, 0, 0}));
     if (!w.has("center_world")) w.fail("center_world", "a required key");
-    p.normal_world = to_vec(read_vec<3>(w, "normal_world", {0, 1, 0}));
+    p.normal_world = to_vec(w.get_array_or<3>("normal_world", {0, 1, 0}));
     if (!w.has("normal_world")) w.fail("normal_world", "a required key");
-    p.up_world = to_vec(read_vec<3>(w, "up_world", {0, 0, 1}));
-    p.size_m = read_vec<2>(w, "size_m", p.size_m);
+    p.up_world = to_vec(w.get_array_or<3>("up_world", {0, 0, 1}));
+    p.size_m = w.get_array_or<2>("size_m", p.size_m);
     if (!w.has("size_m")) w.fail("size_m", "a required key");
     w.finish();
     s.window = p;
@@ -108,14 +62,14 @@ LensDropletSpec parse_lens_droplet_spec(const JsonReader& r) {
   s.slide_min_radius_mm = r.get_or<double>("slide_min_radius_mm", s.slide_min_radius_mm);
   s.samples_per_pixel = r.get_or<int>("samples_per_pixel", s.samples_per_pixel);
   s.max_bounces = r.get_or<int>("max_bounces", s.max_bounces);
-  s.geometry = read_enum(r, "geometry", s.geometry, {CapGeometry::kAnalytic, CapGeometry::kTriangles});
+  s.geometry = r.get_enum_or("geometry", s.geometry, {CapGeometry::kAnalytic, CapGeometry::kTriangles});
   s.cap_segments = r.get_or<int>("cap_segments", s.cap_segments);
   if (r.has("environment_radiance") && r.value()["environment_radiance"].is_string()) {
     std::string v = r.get<std::string>("environment_radiance");
     if (v != "mean")
       throw InputError(r.where("environment_radiance"), "expected \"mean\" or [r, g, b], got \"" + v + "\"");
   } else if (r.has("environment_radiance") && !r.value()["environment_radiance"].is_null()) {
-    s.environment_radiance = read_vec<3>(r, "environment_radiance", {0, 0, 0});
+    s.environment_radiance = r.get_array_or<3>("environment_radiance", {0, 0, 0});
   } else {
     r.mark("environment_radiance");
   }

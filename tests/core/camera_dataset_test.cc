@@ -97,7 +97,7 @@ TEST(DatasetTest, RoundTrip) {
   ASSERT_EQ(back.cameras.size(), 10u);
   EXPECT_LT((back.cameras[3].camera_from_world - d.cameras[3].camera_from_world).norm(), 1e-12);
   EXPECT_DOUBLE_EQ(back.cameras[3].exposure_s, 1.0 / 60);
-  EXPECT_EQ(back.path("images", "003"), dir.path() + "/images/003.png");
+  EXPECT_EQ(back.path(ImageKind::kImages, "003"), dir.path() + "/images/003.png");
 }
 
 // Writes `text` as cameras.json next to a valid dataset.json and returns the error message.

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace weathergs::testing {
 
@@ -31,6 +32,14 @@ class TempDir {
   }
   std::filesystem::path path_;
 };
+
+// Where tests look for the LPIPS weights: the project checkout's ../shared/models/lpips.
+inline std::vector<std::string> lpips_model_search() {
+  return {std::string(WEATHERGS_SOURCE_DIR) + "/../shared/models/lpips"};
+}
+
+// The Blender scene script of the source tree.
+inline std::string blender_script() { return std::string(WEATHERGS_SOURCE_DIR) + "/blender_scripts/render_scene.py"; }
 
 // Number of entries in a directory (to assert that no temp/partial file was left behind).
 inline int count_entries(const std::string& dir) {

@@ -124,7 +124,7 @@ TEST(MetricsTest, SameBitsWithOneOrTwoThreads) {
 }
 
 TEST(LpipsTest, ReproducesOfficialReferenceValues) {
-  Lpips lpips(find_lpips_model(std::nullopt));
+  Lpips lpips(find_lpips_model(testing::lpips_model_search()));
   Image ref = read_image(kLpipsRef + "ex_ref.png");
   EXPECT_NEAR(lpips.distance(ref, read_image(kLpipsRef + "ex_p0.png")), 0.721881, kLpipsReferenceTol);
   EXPECT_NEAR(lpips.distance(ref, read_image(kLpipsRef + "ex_p1.png")), 0.137566, kLpipsReferenceTol);
@@ -137,7 +137,7 @@ TEST(LpipsTest, ReproducesOfficialReferenceValues) {
 }
 
 TEST(LpipsTest, ExtremeAndTinyInputs) {
-  Lpips lpips(find_lpips_model(std::nullopt));
+  Lpips lpips(find_lpips_model(testing::lpips_model_search()));
   const double d = lpips.distance(constant(64, 64, 0.f), constant(64, 64, 1.f));
   EXPECT_TRUE(std::isfinite(d));
   EXPECT_GT(d, 0);
@@ -150,15 +150,19 @@ TEST(LpipsTest, ExtremeAndTinyInputs) {
 
 TEST(LpipsTest, MissingModelSaysWhereItLooked) {
   try {
-    find_lpips_model(std::string("/nonexistent/lpips.onnx"));
+    find_lpips_model({"/nonexistent/lpips.onnx", "/nonexistent_dir"});
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/lpips.onnx"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/nonexistent_dir"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("--no-lpips"), std::string::npos);
   }
-  ::setenv(kLpipsEnvVar, "/nonexistent_env_dir", 1);
-  EXPECT_THROW(find_lpips_model(std::nullopt), InputError);
-  ::unsetenv(kLpipsEnvVar);
-  EXPECT_NO_THROW(find_lpips_model(std::nullopt));
+  EXPECT_THROW(find_lpips_model({}), InputError);
+  // The first candidate that holds the model wins; a folder or the file itself both work.
+  std::vector<std::string> search = {"/nonexistent_dir"};
+  for (const std::string& s : testing::lpips_model_search()) search.push_back(s);
+  EXPECT_NO_THROW(find_lpips_model(search));
+  EXPECT_EQ(find_lpips_model({find_lpips_model(search)}), find_lpips_model(search));
 }
 
 TEST(ScorePairTest, SixteenBitPngAndExrInputs) {

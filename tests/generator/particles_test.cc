@@ -68,8 +68,7 @@ TEST(ParticleField, SizesFollowTheTruncatedDistribution) {
     o.d_min_mm = 0.5;  // keeps the tiny-drop classes from dominating the sample size
     const ParticleField field(o, 3);
     std::vector<double> d;
-    for (const SizeClass& c : field.classes()) (void)c;
-    // Equal volume per class: V = 2000 m^3 sampled as whole cells.
+    // Equal volume per class: V = 300 m^3 sampled as whole cells.
     for (int k = 0; k < int(field.classes().size()); ++k) {
       const SizeClass& c = field.classes()[size_t(k)];
       const int cells = std::max(1, int(std::lround(300.0 / std::pow(c.cell_m, 3))));

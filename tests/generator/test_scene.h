@@ -88,8 +88,8 @@ inline void make_clean_dataset(const std::string& dir, const SceneOptions& o) {
         for (int k = 0; k < 3; ++k) rgb.at(x, y, k) = float(col[k]);
         depth.at(x, y) = std::isfinite(t) ? float(t) : o.background_depth;  // planar: dir has z_cam = 1
       }
-    write_image(d.path("clean", c.name), rgb);
-    write_depth(d.path("depth", c.name, ".exr"), depth);
+    write_image(d.path(ImageKind::kClean, c.name), rgb);
+    write_depth(d.path(ImageKind::kDepth, c.name), depth);
     d.cameras.push_back(c);
     names.push_back(c.name);
   }

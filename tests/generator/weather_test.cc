@@ -68,12 +68,12 @@ TEST(Weather, RainWritesACompleteDataset) {
   EXPECT_EQ(spec["effects"]["rain"]["diameter_range_mm"][1], 6.0);
   EXPECT_NEAR(spec["effects"]["rain"]["turbulence"]["rms_m_s"].get<double>(), 0.25 * std::sqrt(1.25), 1e-12);
   for (const Camera& c : d.cameras) {
-    for (const std::string& f : {d.path("images", c.name), d.path("clean", c.name), d.path("depth", c.name, ".exr"),
-                                 d.path("masks/particles", c.name), d.path("layers/particle_alpha", c.name, ".exr"),
-                                 d.path("layers/rain_alpha", c.name, ".exr"),
-                                 d.path("layers/particles_rain", c.name, ".csv")})
+    for (const std::string& f : {d.path(ImageKind::kImages, c.name), d.path(ImageKind::kClean, c.name), d.path(ImageKind::kDepth, c.name),
+                                 d.path(ImageKind::kParticleMask, c.name), d.layer_path("particle_alpha", c.name, ".exr"),
+                                 d.layer_path("rain_alpha", c.name, ".exr"),
+                                 d.layer_path("particles_rain", c.name, ".csv")})
       EXPECT_TRUE(fs::exists(f)) << f;
-    const Image alpha = read_image(d.path("layers/particle_alpha", c.name, ".exr"));
+    const Image alpha = read_image(d.layer_path("particle_alpha", c.name, ".exr"));
     double sum = 0;
     for (float a : alpha.data) {
       ASSERT_TRUE(a >= 0 && a <= 1);
@@ -82,7 +82,7 @@ TEST(Weather, RainWritesACompleteDataset) {
     EXPECT_GT(sum, 0) << c.name;
   }
   EXPECT_GT(block["counters"]["rain.particles_drawn"].get<int64_t>(), 0);
-  EXPECT_NE(read_file(d.path("images", "000")), read_file(d.path("clean", "000")));
+  EXPECT_NE(read_file(d.path(ImageKind::kImages, "000")), read_file(d.path(ImageKind::kClean, "000")));
 }
 
 TEST(Weather, ManifestRecordsThePhysics) {

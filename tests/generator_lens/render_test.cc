@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/thin_lens.h"
 #include "generator/lens/lens_render.h"
 #include "tests/generator_lens/lens_test_util.h"
 
@@ -252,9 +253,10 @@ TEST(LensRenderTest, DefocusFollowsTheThinLensAndKeepsCoverageMass) {
   cam.focal_length_mm = 4;
   cam.focus_distance_m = 3;
   // c = fx * (f / N) * |S2 - S1| / (S2 (S1 - f)) = 140 * 0.5e-3 * 2.97 / (0.03 * 2.996) = 2.313 px.
-  EXPECT_NEAR(circle_of_confusion_px(cam, 0.03), 140 * 0.5e-3 * 2.97 / (0.03 * 2.996), 1e-12);
-  EXPECT_NEAR(circle_of_confusion_px(cam, 0.03), 2.3131, 1e-4);
-  EXPECT_EQ(circle_of_confusion_px(test_camera(), 0.03), 0.0);  // no thin-lens data: pinhole
+  const double coc = thin_lens_of(cam)->coc_diameter_px(cam.fx, 0.03);
+  EXPECT_NEAR(coc, 140 * 0.5e-3 * 2.97 / (0.03 * 2.996), 1e-12);
+  EXPECT_NEAR(coc, 2.3131, 1e-4);
+  EXPECT_FALSE(thin_lens_of(test_camera()).has_value());  // no thin-lens data: pinhole
   cam.f_number = 1.4;  // 13.2 px
   const Image img = test_image(cam.width, cam.height);
   // Drops well inside the frame, so the blur moves no coverage across the border.
@@ -268,7 +270,7 @@ TEST(LensRenderTest, DefocusFollowsTheThinLensAndKeepsCoverageMass) {
   };
   LensViewResult sharp = with("false"), blurred = with("true");
   EXPECT_EQ(sharp.blur_diameter_px, 0);
-  EXPECT_NEAR(blurred.blur_diameter_px, circle_of_confusion_px(cam, 0.03), 1e-9);
+  EXPECT_NEAR(blurred.blur_diameter_px, thin_lens_of(cam)->coc_diameter_px(cam.fx, 0.03), 1e-9);
   EXPECT_NEAR(mean(blurred.coverage), mean(sharp.coverage), 1e-4 * mean(sharp.coverage) + 1e-7);
   // Blurring spreads coverage: fewer fully covered pixels, more partially covered ones.
   auto count_if = [](const Image& c, float lo, float hi) {

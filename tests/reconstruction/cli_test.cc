@@ -82,18 +82,24 @@ TEST(CliTest, MaskAndImageFolders) {
     for (int y = 0; y < 10; ++y)
       for (int x = 0; x < 15; ++x) m.at(x, y) = 1.f;
     write_mask(dir / "masks/" + v + ".png", m);
-    fs::copy_file(d.path("images", v), dir / "imgs/" + v + ".png");
+    fs::copy_file(d.path(ImageKind::kImages, v), dir / "imgs/" + v + ".png");
   }
-  ASSERT_EQ(run("train --data " + dir / "data" + " --images " + dir / "imgs" + " --masks " + dir / "masks" +
+  ASSERT_EQ(run("train --data " + dir / "data" + " --images-dir " + dir / "imgs" + " --masks-dir " + dir / "masks" +
                 " --iterations 10 --out " + dir / "run"),
             0);
   JsonReader info = JsonReader::from_file(dir / "run/run.json");
-  EXPECT_EQ(info.get<std::string>("masks"), dir / "masks");
-  EXPECT_EQ(info.get<std::string>("images"), dir / "imgs");
+  EXPECT_EQ(info.get<std::string>("masks_dir"), dir / "masks");
+  EXPECT_EQ(info.get<std::string>("images_dir"), dir / "imgs");
+  EXPECT_EQ(info.get<std::string>("masks"), "none");
+  // A folder is never mistaken for a mode, nor a mode for a folder (a folder named "lens" is a folder).
+  EXPECT_EQ(run("train --data " + dir / "data" + " --masks " + dir / "masks" + " --out " + dir / "r1"), 2);
+  EXPECT_EQ(run("train --data " + dir / "data" + " --masks lens --masks-dir " + dir / "masks" + " --out " + dir / "r1"),
+            2);
+  EXPECT_FALSE(fs::exists(dir / "r1"));
   // Missing folders and wrongly sized masks are input errors.
   EXPECT_EQ(run("train --data " + dir / "data" + " --images clean --out " + dir / "r2"), 2);
   write_mask(dir / "masks/" + d.split("train")[0] + ".png", Image(8, 8, 1, ColorSpace::kLinear));
-  EXPECT_EQ(run("train --data " + dir / "data" + " --masks " + dir / "masks" + " --out " + dir / "r3"), 2);
+  EXPECT_EQ(run("train --data " + dir / "data" + " --masks-dir " + dir / "masks" + " --out " + dir / "r3"), 2);
   EXPECT_FALSE(fs::exists(dir / "r2"));
   EXPECT_FALSE(fs::exists(dir / "r3"));
 }

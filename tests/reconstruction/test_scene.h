@@ -109,7 +109,7 @@ inline Dataset write_synthetic_dataset(const std::string& root, const GaussianSe
   std::vector<std::string> names;
   for (const Camera& c : cameras) {
     names.push_back(c.name);
-    write_image(d.path("images", c.name), render_image(truth, c));
+    write_image(d.path(ImageKind::kImages, c.name), render_image(truth, c));
   }
   d.info.name = "synthetic_clear";
   d.info.scene = "synthetic";

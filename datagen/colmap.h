@@ -1,0 +1,54 @@
+// COLMAP 3.8 (CPU) as an external tool: triangulation with known poses (the sparse/0 export of a
+// generated dataset), the mapper with unknown poses (imported footage), and model_analyzer.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+
+namespace weathergs::datagen {
+
+struct ColmapOptions {
+  std::string executable = "colmap";
+  int num_threads = -1;  // COLMAP's -1 = all cores
+  double timeout_s = 0;  // per COLMAP call; 0 = no limit
+
+  void validate() const;  // InputError naming the field (executable set, num_threads -1 or >= 1, timeout >= 0)
+};
+
+struct ModelStats {
+  int cameras = 0, images = 0, registered_images = 0, points = 0, observations = 0;
+  double mean_track_length = 0;
+  double mean_reprojection_error_px = 0;
+};
+
+// `colmap model_analyzer --path model_dir`, parsed. InputError if COLMAP cannot read the model.
+ModelStats analyze_model(const std::string& model_dir, const ColmapOptions& options, const std::string& log_path);
+
+struct TriangulationResult {
+  ModelStats stats;
+  double seconds = 0;
+};
+
+// Known poses: SIFT features of every view in image_dir (<name>.png), exhaustive matching, then
+// `point_triangulator` with our cameras (intrinsics fixed; poses fixed), written as a text model to
+// model_dir (created; must not exist). work_dir holds the database and logs. All views must share
+// their intrinsics (one PINHOLE camera, like our scenes).
+TriangulationResult triangulate_known_poses(const std::vector<Camera>& cameras, const std::string& image_dir,
+                                            const std::string& work_dir, const std::string& model_dir,
+                                            const ColmapOptions& options);
+
+struct MapperResult {
+  ModelStats stats;
+  std::vector<Camera> cameras;     // registered views, named by file stem, in name order
+  std::vector<std::string> unregistered;
+  double seconds = 0;
+};
+
+// Unknown poses: features, sequential or exhaustive matching, the mapper with the robust settings of
+// ENVIRONMENT.md (PINHOLE, one camera), keeping the largest model, written as text to model_dir.
+MapperResult map_unknown_poses(const std::string& image_dir, const std::string& work_dir, const std::string& model_dir,
+                               const ColmapOptions& options);
+
+}  // namespace weathergs::datagen

@@ -1,0 +1,114 @@
+// The dataset layout, the background-depth rule, the thin lens and JsonReader's shared helpers: the
+// one home of each (docs/architecture.md, "One home per concept").
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "core/dataset.h"
+#include "core/json_reader.h"
+#include "core/thin_lens.h"
+#include "tests/core/test_util.h"
+
+namespace weathergs {
+namespace {
+
+enum class Mode { kA, kB };
+const char* to_string(Mode m) { return m == Mode::kA ? "a" : "b"; }
+
+template <typename F>
+std::string input_error(F&& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DatasetLayoutTest, PathsOfEveryKind) {
+  Dataset d;
+  d.root = "/data/pool_rain";
+  EXPECT_EQ(d.path(ImageKind::kImages, "007"), "/data/pool_rain/images/007.png");
+  EXPECT_EQ(d.path(ImageKind::kClean, "007"), "/data/pool_rain/clean/007.png");
+  EXPECT_EQ(d.path(ImageKind::kDepth, "007"), "/data/pool_rain/depth/007.exr");
+  EXPECT_EQ(d.path(ImageKind::kLensMask, "007"), "/data/pool_rain/masks/lens/007.png");
+  EXPECT_EQ(d.path(ImageKind::kParticleMask, "007"), "/data/pool_rain/masks/particles/007.png");
+  EXPECT_EQ(d.layer_path("particle_alpha", "007"), "/data/pool_rain/layers/particle_alpha/007.exr");
+  EXPECT_EQ(d.file(layout::kSparseModelDir), "/data/pool_rain/sparse/0");
+  EXPECT_EQ(d.dir(ImageKind::kLensMask), "/data/pool_rain/masks/lens");
+}
+
+TEST(DatasetLayoutTest, CleanIfPresentElseImages) {
+  testing::TempDir dir;
+  Dataset d;
+  d.root = dir.path();
+  std::filesystem::create_directories(d.dir(ImageKind::kImages));
+  EXPECT_FALSE(d.has(ImageKind::kClean));
+  EXPECT_EQ(d.clean_or_input_path("001"), d.path(ImageKind::kImages, "001"));
+  std::filesystem::create_directories(d.dir(ImageKind::kClean));
+  EXPECT_EQ(d.clean_or_input_path("001"), d.path(ImageKind::kClean, "001"));
+}
+
+TEST(DatasetLayoutTest, BackgroundDepthHasOneDefinition) {
+  // DATASET_FORMAT.md: background is +inf or any value >= 1e9.
+  EXPECT_TRUE(is_background_depth(std::numeric_limits<float>::infinity()));
+  EXPECT_TRUE(is_background_depth(1e9f));
+  EXPECT_TRUE(is_background_depth(3e9f));
+  EXPECT_FALSE(is_background_depth(65504.f));  // EEVEE's raw background is converted by datagen
+  EXPECT_FALSE(is_background_depth(999.f));
+  EXPECT_FALSE(is_background_depth(0.f));
+}
+
+TEST(ThinLensTest, CircleOfConfusionFollowsTheThinLens) {
+  Camera c;
+  c.name = "v";
+  c.fx = 140;
+  EXPECT_FALSE(thin_lens_of(c).has_value());  // no lens data: a pinhole
+  c.f_number = 8;
+  c.focal_length_mm = 4;
+  c.focus_distance_m = 3;
+  const ThinLens lens = *thin_lens_of(c);
+  // fx * (f / N) * |z - s| / (z (s - f)) with f = 4 mm, N = 8, s = 3 m, z = 3 cm.
+  EXPECT_NEAR(lens.coc_diameter_px(c.fx, 0.03), 140 * 0.5e-3 * 2.97 / (0.03 * 2.996), 1e-12);
+  EXPECT_DOUBLE_EQ(lens.coc_radius_px(c.fx, 0.03), 0.5 * lens.coc_diameter_px(c.fx, 0.03));
+  EXPECT_DOUBLE_EQ(lens.coc_diameter_px(c.fx, 3.0), 0.0);  // in focus
+  EXPECT_DOUBLE_EQ(lens.coc_diameter_px(c.fx, 0.0), 0.0);  // degenerate depth: no blur, no NaN
+  EXPECT_TRUE(std::isfinite(lens.coc_diameter_px(c.fx, 1e-30)));
+  // Bad lens data: an error naming the view and the field.
+  c.focus_distance_m = 0.002;  // closer than the focal length
+  EXPECT_NE(input_error([&] { thin_lens_of(c); }).find("focus_distance_m"), std::string::npos);
+  c.focus_distance_m = std::numeric_limits<double>::infinity();
+  EXPECT_NE(input_error([&] { thin_lens_of(c); }).find("view 'v'"), std::string::npos);
+  c.focus_distance_m = 3;
+  c.f_number = 0;
+  EXPECT_NE(input_error([&] { thin_lens_of(c); }).find("f_number"), std::string::npos);
+}
+
+TEST(JsonReaderHelpersTest, OneGrammarAndOneWording) {
+  const Json doc = Json::parse(R"({"n": 5, "big": 1e6, "v3": [1, 2, 3], "v2": [1], "r1": 0.5, "r2": [0.5, 3],
+                                   "rbad": [3, 0.5], "mode": "b", "mbad": "c", "s": "x"})");
+  JsonReader r(doc, "spec.json");
+  EXPECT_EQ(r.get_number("n", 0, 10), 5);
+  EXPECT_EQ(r.get_number_or("missing", 7, 0, 10), 7);
+  EXPECT_EQ(input_error([&] { r.get_number("big", 0, 10); }), "spec.json:/big: expected a number in [0, 10], got 1e+06");
+  EXPECT_EQ((r.get_array<3>("v3")), (std::array<double, 3>{1, 2, 3}));
+  EXPECT_NE(input_error([&] { r.get_array<3>("v2"); }).find("expected an array of 3 numbers, got 1 elements"),
+            std::string::npos);
+  EXPECT_EQ(input_error([&] { r.get_array<3>("v3", 0, 2); }), "spec.json:/v3/2: expected a number in [0, 2], got 3");
+  EXPECT_EQ(r.get_range_or("r1", {0, 0}), (std::array<double, 2>{0.5, 0.5}));
+  EXPECT_EQ(r.get_range_or("r2", {0, 0}), (std::array<double, 2>{0.5, 3}));
+  EXPECT_EQ(r.get_range_or("absent", {1, 2}), (std::array<double, 2>{1, 2}));
+  EXPECT_EQ(input_error([&] { r.get_range_or("rbad", {0, 0}); }),
+            "spec.json:/rbad: expected [min, max] with min <= max, got [3, 0.5]");
+  EXPECT_NE(input_error([&] { r.get_range_or("s", {0, 0}); }).find("expected a number or [min, max]"), std::string::npos);
+  EXPECT_EQ(r.get_enum("mode", {Mode::kA, Mode::kB}), Mode::kB);
+  EXPECT_EQ(r.get_enum_or("nomode", Mode::kA, {Mode::kA, Mode::kB}), Mode::kA);
+  EXPECT_EQ(input_error([&] { r.get_enum("mbad", {Mode::kA, Mode::kB}); }),
+            "spec.json:/mbad: expected one of \"a\", \"b\", got \"c\"");
+  r.finish();  // every key above was read
+}
+
+}  // namespace
+}  // namespace weathergs

@@ -1,0 +1,81 @@
+// The path-tracer reference of the compositor validation moves particles over the shutter: a sphere
+// moving across the view must be smeared over exactly its projected path (start and end known).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "core/image.h"
+#include "datagen/blender.h"
+#include "datagen/process.h"
+#include "tests/core/test_util.h"
+
+namespace weathergs::datagen {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::TempDir;
+
+// The smear's ends are found to the pixel: the sphere's disc (2.7 px radius) at both ends, edges
+// where more than a tenth of the disc covers the pixel.
+constexpr double kEndTolerancePx = 1.5;
+
+TEST(CyclesShutterTest, MotionBlurCoversTheProjectedPath) {
+  if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
+  const SceneSpec scene = read_scene_spec(std::string(WEATHERGS_SOURCE_DIR) + "/scenes/pool.json");
+  ProfileSpec profile{"shutter", 300, 200, 1, 32, "cycles"};
+  Camera cam = scene_cameras(scene, profile)[0];
+  Camera plain = cam, moving = cam;
+  plain.name = "plain";
+  moving.name = "moving";
+  const Eigen::Vector3d forward = cam.rotation().row(2).transpose(), right = cam.rotation().row(0).transpose();
+  const double radius = 0.02, travel = 0.4;
+  const Eigen::Vector3d p0 = cam.center_world() + 1.5 * forward - 0.2 * right;
+  const Eigen::Vector3d v = right * travel / cam.exposure_s;
+  TempDir tmp;
+  Json job = blender_job(scene, scene.variant("clear"), profile, {plain, moving}, {});
+  job["camera"]["views"][0]["particles"] = false;
+  job["camera"]["views"][1]["particles"] = true;
+  job["particles"] = {{"exposure_s", cam.exposure_s},
+                      {"items", {{{"kind", "snow"}, {"radius_m", radius},
+                                  {"p_world", {p0.x(), p0.y(), p0.z()}}, {"v_world", {v.x(), v.y(), v.z()}}}}}};
+  job["output_dir"] = tmp / "render";
+  fs::create_directories(tmp / "render");
+  write_file_atomic(tmp / "job.json", job.dump());
+  ProcessOptions popts;
+  popts.log_path = tmp / "blender.log";
+  BlenderOptions bo;
+  bo.script = testing::blender_script();
+  const ProcessResult r = run_process({"blender", "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+                                       bo.script, "--", tmp / "job.json"},
+                                      "blender", popts);
+  ASSERT_EQ(r.exit_code, 0) << tail_of_file(popts.log_path, 30);
+
+  const Image a = read_image(tmp / "render/clean/plain.png");
+  const Image b = read_image(tmp / "render/clean/moving.png");
+  const Eigen::Vector2d start = *cam.project(p0), end = *cam.project(p0 + v * cam.exposure_s);
+  const double r_px = cam.fx * radius / 1.5;
+  // A band around the path: the sun also moves the sphere's shadow across the deck below it.
+  int x_min = 1 << 30, x_max = -1, y_min = 1 << 30, y_max = -1;
+  for (int y = int(start.y()) - 12; y <= int(start.y()) + 12; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      double d = 0;
+      for (int c = 0; c < 3; ++c) d += std::abs(a.at(x, y, c) - b.at(x, y, c));
+      if (d > 0.04) x_min = std::min(x_min, x), x_max = std::max(x_max, x), y_min = std::min(y_min, y), y_max = std::max(y_max, y);
+    }
+  ASSERT_GE(x_max, 0) << "the moving sphere is not in the render";
+  // The smear spans from the start disc's left edge to the end disc's right edge.
+  EXPECT_NEAR(x_min + 0.5, start.x() - r_px, r_px + kEndTolerancePx);
+  EXPECT_NEAR(x_max + 0.5, end.x() + r_px, r_px + kEndTolerancePx);
+  EXPECT_NEAR(x_min + 0.5, start.x(), kEndTolerancePx + r_px);
+  EXPECT_NEAR(0.5 * (y_min + y_max + 1), start.y(), kEndTolerancePx);
+  EXPECT_LE(y_max - y_min + 1, 2 * r_px + 2 * kEndTolerancePx);
+  // Without motion blur (or with a shutter twice too long) the smear would be 2r or ~2x longer.
+  EXPECT_NEAR(x_max - x_min, end.x() - start.x(), 2 * r_px + kEndTolerancePx);
+  std::printf("smear x %d-%d y %d-%d; path x %.1f-%.1f y %.1f, radius %.1f px\n", x_min, x_max, y_min, y_max,
+              start.x(), end.x(), start.y(), r_px);
+}
+
+}  // namespace
+}  // namespace weathergs::datagen
