@@ -12,7 +12,8 @@ namespace {
 
 struct GenerateArgs {
   std::string scene, weather, suite, out, profile = "quick", cache, blender = "blender", colmap = "colmap";
-  std::string blender_script;
+  std::string blender_script, style;
+  bool targets = false;
   int64_t seed = -1;
   bool no_colmap = false;
   int max_views = 0;
@@ -32,6 +33,8 @@ int run(const GenerateArgs& a) {
   o.cache_dir = cache_dir(a.cache);
   if (a.seed >= 0) o.seed = uint64_t(a.seed);
   o.colmap = !a.no_colmap;
+  o.targets = a.targets;
+  if (!a.style.empty()) o.style = a.style == "paper" ? WeatherStyle::kPaper : WeatherStyle::kPhysical;
   o.blender.executable = a.blender;
   o.blender.max_views = a.max_views;
   o.blender.script = find_blender_script(a.blender_script);
@@ -66,6 +69,10 @@ Command make(CLI::App& root) {
   sub->add_option("--max-views", a->max_views, "Render only the first N views of the profile (0 = all)")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--no-colmap", a->no_colmap, "Skip the COLMAP exports (sparse/0, sparse_clean/0)");
+  sub->add_flag("--targets", a->targets, "Write the weather's restoration targets (targets/, docs/generator.md)");
+  sub->add_option("--style", a->style,
+                  "Weather style of every variant: paper (the scene files' default) or physical (realism studies)")
+      ->check(CLI::IsMember({"physical", "paper"}));
   sub->add_option("--blender", a->blender, "Blender executable")->capture_default_str();
   sub->add_option("--blender-script", a->blender_script,
                   "Scene script (default: $WEATHERGS_BLENDER_SCRIPT, else the installed blender_scripts/render_scene.py)");

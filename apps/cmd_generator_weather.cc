@@ -1,4 +1,4 @@
-// `weathergs weather`: adds rain, snow and fog in physical units to a clean dataset.
+// `weathergs weather`: adds rain, snow and fog (physical units, or the paper's style) to a clean dataset.
 #include <cstdio>
 #include <memory>
 
@@ -13,7 +13,8 @@ namespace {
 struct WeatherArgs {
   std::string in, spec, out, name;
   int64_t seed = -1;
-  bool no_layers = false, no_manifest = false;
+  bool no_layers = false, no_manifest = false, targets = false;
+  std::string style;
   double mask_threshold = WeatherRunOptions().mask_threshold;
 };
 
@@ -35,6 +36,11 @@ Command make_weather(CLI::App& root) {
       ->capture_default_str();
   sub->add_flag("--no-layers", a->no_layers, "Do not write float layers (layers/*.exr)");
   sub->add_flag("--no-manifest", a->no_manifest, "Do not write per-particle manifests");
+  sub->add_flag("--targets", a->targets,
+                "Also write targets/no_particles/ (every effect but the particles) and targets/lens_only/ "
+                "(the clean view with the lens drops only): exact targets for restoration filters");
+  sub->add_option("--style", a->style, "Override the spec's style: physical (ignores paper blocks) or paper")
+      ->check(CLI::IsMember({"physical", "paper"}));
   return {sub, [a] {
             WeatherRunOptions o;
             if (a->seed >= 0) o.seed = uint64_t(a->seed);
@@ -42,6 +48,8 @@ Command make_weather(CLI::App& root) {
             o.write_layers = !a->no_layers;
             o.write_manifest = !a->no_manifest;
             o.mask_threshold = a->mask_threshold;
+            o.write_targets = a->targets;
+            if (!a->style.empty()) o.style = a->style == "paper" ? WeatherStyle::kPaper : WeatherStyle::kPhysical;
             const Json block = run_weather(a->in, JsonReader::from_file(a->spec), a->out, o);
             if (!is_quiet()) {
               std::fprintf(stderr, "wrote %s (seed %s):", a->out.c_str(), block["seed"].dump().c_str());

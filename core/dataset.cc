@@ -29,6 +29,8 @@ const char* folder_of(ImageKind kind) {
     case ImageKind::kDepth: return layout::kDepthDir;
     case ImageKind::kLensMask: return layout::kLensMaskDir;
     case ImageKind::kParticleMask: return layout::kParticleMaskDir;
+    case ImageKind::kTargetNoParticles: return layout::kTargetNoParticlesDir;
+    case ImageKind::kTargetLensOnly: return layout::kTargetLensOnlyDir;
   }
   WGS_CHECK(false);
 }
@@ -42,6 +44,8 @@ const char* to_string(ImageKind kind) {
     case ImageKind::kDepth: return "depth";
     case ImageKind::kLensMask: return "lens_mask";
     case ImageKind::kParticleMask: return "particle_mask";
+    case ImageKind::kTargetNoParticles: return "target_no_particles";
+    case ImageKind::kTargetLensOnly: return "target_lens_only";
   }
   WGS_CHECK(false);
 }

@@ -17,6 +17,10 @@ inline constexpr const char* kDepthDir = "depth";      // planar depth of the cl
 inline constexpr const char* kLensMaskDir = "masks/lens";
 inline constexpr const char* kParticleMaskDir = "masks/particles";
 inline constexpr const char* kLayersDir = "layers";    // optional float layers: layers/<name>/<view>.exr
+// Restoration targets of the generator (optional): the weathered view without the particles (every
+// other effect on), and the clean view with only the lens drops.
+inline constexpr const char* kTargetNoParticlesDir = "targets/no_particles";
+inline constexpr const char* kTargetLensOnlyDir = "targets/lens_only";
 inline constexpr const char* kSparseDir = "sparse";    // COLMAP models of the input images
 inline constexpr const char* kSparseModelDir = "sparse/0";
 inline constexpr const char* kSparseCleanModelDir = "sparse_clean/0";  // the same from the clean images
@@ -26,11 +30,12 @@ inline constexpr const char* kDepthExt = ".exr";
 }  // namespace layout
 
 // The per-view files of a dataset.
-enum class ImageKind { kImages, kClean, kDepth, kLensMask, kParticleMask };
+enum class ImageKind { kImages, kClean, kDepth, kLensMask, kParticleMask, kTargetNoParticles, kTargetLensOnly };
 
 const char* folder_of(ImageKind kind);     // relative to the dataset root, e.g. "masks/lens"
 const char* extension_of(ImageKind kind);  // ".png" or ".exr"
-const char* to_string(ImageKind kind);     // "images", "clean", "depth", "lens_mask", "particle_mask"
+const char* to_string(ImageKind kind);  // "images", "clean", "depth", "lens_mask", "particle_mask",
+                                        // "target_no_particles", "target_lens_only"
 
 // Planar depths at or beyond this many meters are background (no geometry), as is +inf.
 inline constexpr float kBackgroundDepthM = 1e9f;

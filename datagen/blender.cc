@@ -167,6 +167,12 @@ RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& va
   fs::rename(raw / "render_log.json", root / "logs" / "render_log.json");
   fs::remove_all(raw);
 
+  // Lens data is ours, not Blender's (it renders a pinhole; the generator applies the lens): carry it over.
+  for (size_t i = 0; i < rendered.size(); ++i) {
+    rendered[i].focal_length_mm = cameras[i].focal_length_mm;
+    rendered[i].f_number = cameras[i].f_number;
+    rendered[i].focus_distance_m = cameras[i].focus_distance_m;
+  }
   ds.cameras = rendered;
   ds.info.name = scene.name + "_" + variant.name + "_clean";
   ds.info.scene = scene.name;

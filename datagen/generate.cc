@@ -108,7 +108,9 @@ GenerateSummary generate_variant(const std::string& scene_path, const std::strin
     WeatherRunOptions wopts;
     wopts.seed = o.seed;
     wopts.name = name;
-    wopts.copy_exports = false;  // sparse/0 and transforms.json are made below from the weathered images
+    wopts.copy_exports = false;
+    wopts.write_targets = o.targets;
+    wopts.style = o.style;  // sparse/0 and transforms.json are made below from the weathered images
     const JsonReader spec(variant.weather, scene.file, "/variants/" + variant.name + "/weather");
     run_weather(s.cache_entry, spec, root.string(), wopts);
   } else {
@@ -160,6 +162,13 @@ std::vector<GenerateSummary> generate_suite(const std::string& suite_path, const
   if (!r.is_object()) throw InputError(r.where(), "expected a suite object {name, variants}");
   const std::string suite_name = r.get<std::string>("name");
   r.get_or<std::string>("description", "");
+  // A suite may fix the weather style of all its variants (scenes/suite_physical.json); an explicit
+  // option wins.
+  GenerateOptions vo = o;
+  if (r.has("style")) {
+    const WeatherStyle style = r.get_enum("style", {WeatherStyle::kPhysical, WeatherStyle::kPaper});
+    if (!vo.style) vo.style = style;
+  }
   JsonReader list = r.child("variants");
   if (!list.is_array() || list.size() == 0) throw InputError(list.where(), "expected a non-empty array of variants");
   struct Item {
@@ -175,7 +184,7 @@ std::vector<GenerateSummary> generate_suite(const std::string& suite_path, const
     // Validate every variant before the first (slow) render.
     const SceneSpec spec = read_scene_spec(it.scene);
     spec.variant(it.weather);
-    spec.profile(o.profile);
+    spec.profile(vo.profile);
     items.push_back(it);
   }
   r.finish();
@@ -187,14 +196,16 @@ std::vector<GenerateSummary> generate_suite(const std::string& suite_path, const
   for (const Item& it : items) {
     const SceneSpec spec = read_scene_spec(it.scene);
     bar.set_status(spec.name + "_" + it.weather);
-    summaries.push_back(generate_variant(it.scene, it.weather, (fs::path(out_dir) / (spec.name + "_" + it.weather)).string(), o));
+    summaries.push_back(generate_variant(it.scene, it.weather, (fs::path(out_dir) / (spec.name + "_" + it.weather)).string(), vo));
     bar.tick();
   }
   bar.finish();
   Json all = Json::array();
   for (const auto& s : summaries) all.push_back(s.to_json());
   write_file_atomic((fs::path(out_dir) / "summary.json").string(),
-                    Json{{"suite", suite_name}, {"profile", o.profile}, {"total_seconds", seconds_since(start)},
+                    Json{{"suite", suite_name}, {"profile", vo.profile},
+                         {"style", vo.style ? to_string(*vo.style) : "per variant"},
+                         {"total_seconds", seconds_since(start)},
                          {"variants", all}}
                         .dump(1));
   return summaries;

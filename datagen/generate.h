@@ -13,6 +13,7 @@
 
 #include "datagen/blender.h"
 #include "datagen/colmap.h"
+#include "generator/weather_spec.h"
 
 namespace weathergs::datagen {
 
@@ -23,6 +24,8 @@ struct GenerateOptions {
   std::string cache_dir;
   std::optional<uint64_t> seed;  // overrides the variant's weather seed
   bool colmap = true;            // sparse/0 and sparse_clean/0 exports
+  bool targets = false;          // the weather's restoration targets (targets/, docs/generator.md)
+  std::optional<WeatherStyle> style;  // overrides the variants' weather style (physical or paper)
   BlenderOptions blender;
   ColmapOptions colmap_options;
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "core/constants.h"
@@ -22,6 +23,15 @@ std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
   return s;
+}
+
+void check_camera_separation(const SceneSpec& scene, const ProfileSpec& profile, const std::string& where) {
+  const std::vector<Camera> cams = scene_cameras(scene, profile);
+  const double f = min_camera_separation_fraction(cams);
+  if (f < kMinCameraSeparationFraction)
+    throw InputError(where, "the camera path gives views closer than " + std::to_string(kMinCameraSeparationFraction) +
+                                " of the path size (closest pair at " + std::to_string(f) +
+                                "): raise camera.depth_m or radius_m, or change turns");
 }
 
 double read_number(const JsonReader& r, const std::string& key, double lo, double hi, const double* fallback) {
@@ -141,6 +151,14 @@ CameraPathSpec read_camera_path(const JsonReader& r) {
   c.sensor_width_mm = read_number(r, "sensor_width_mm", 1.0, 500.0, &c.sensor_width_mm);
   c.exposure_s = read_number(r, "exposure_s", 0.0, 10.0, &c.exposure_s);
   c.frame_interval_s = read_number(r, "frame_interval_s", 0.0, 1e4, &c.frame_interval_s);
+  // Real lens data (optional, both or neither): the views get f_number and focus_distance_m, so the
+  // generator defocuses lens drops and near particles as this camera would (docs/scenes.md).
+  if (r.has("f_number") != r.has("focus_distance_m"))
+    throw InputError(r.where(), "give both f_number and focus_distance_m (a real lens), or neither (a pinhole)");
+  if (r.has("f_number")) {
+    c.f_number = r.get_number("f_number", 0.5, 64);
+    c.focus_distance_m = r.get_number("focus_distance_m", 1e-3 * c.focal_length_mm * 1.01, 1e5);
+  }
   r.finish();
   const Eigen::Vector3d forward = c.look_at_m - c.position_m;
   if (forward.norm() < 1e-6) throw InputError(r.where("look_at_m"), "must differ from position_m");
@@ -168,6 +186,18 @@ VariantSpec SceneSpec::variant(const std::string& name) const {
   std::vector<std::string> names{"clear"};
   for (const auto& [n, v] : variants) names.push_back(n);
   throw InputError(file + ":/variants", "no variant \"" + name + "\" (available: " + join(names) + ")");
+}
+
+double min_camera_separation_fraction(const std::vector<Camera>& cameras) {
+  double min_d = std::numeric_limits<double>::infinity(), max_d = 0;
+  for (size_t i = 0; i < cameras.size(); ++i)
+    for (size_t j = i + 1; j < cameras.size(); ++j) {
+      const double d = (cameras[i].center_world() - cameras[j].center_world()).norm();
+      min_d = std::min(min_d, d);
+      max_d = std::max(max_d, d);
+    }
+  if (cameras.size() < 2) return 1.0;
+  return max_d > 0 ? min_d / max_d : 0.0;
 }
 
 SceneSpec read_scene_spec(const std::string& path) {
@@ -212,6 +242,9 @@ SceneSpec read_scene_spec(const std::string& path) {
     sp.finish();
   }
 
+  // Every profile's path must give distinct views (a view repeated in the test split tests nothing).
+  for (const auto& [name, profile] : s.profiles) check_camera_separation(s, profile, profiles.where(name));
+
   JsonReader variants = r.child("variants");
   if (!variants.is_object()) throw InputError(variants.where(), "expected an object of named variants");
   for (const std::string& name : variants.keys()) {
@@ -245,10 +278,14 @@ std::vector<Camera> scene_cameras(const SceneSpec& scene, const ProfileSpec& pro
   const double f_px = c.focal_length_mm / c.sensor_width_mm * profile.width;
   std::vector<Camera> cams;
   for (int k = 0; k < profile.views; ++k) {
+    // An ellipse in the image plane traversed `turns` times while the camera dollies linearly from
+    // -depth_m to +depth_m along the viewing direction: with turns >= 2 the loops never revisit a
+    // pose (the dolly separates them), so no two views coincide, and every view (test views
+    // included) has path neighbours on both sides (docs/scenes.md, "Camera path").
     const double theta = 2.0 * kPi * c.turns * k / profile.views;
+    const double dolly = profile.views > 1 ? 2.0 * (k + 0.5) / profile.views - 1.0 : 0.0;
     const Eigen::Vector3d center = c.position_m + right * (c.radius_m.x() * std::cos(theta)) +
-                                   up * (c.radius_m.y() * std::sin(theta)) +
-                                   forward * (c.depth_m * std::sin(0.5 * theta));
+                                   up * (c.radius_m.y() * std::sin(theta)) + forward * (c.depth_m * dolly);
     // OpenCV axes: z toward the target, x right (horizontal), y down.
     const Eigen::Vector3d z = (c.look_at_m - center).normalized();
     const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
@@ -272,6 +309,8 @@ std::vector<Camera> scene_cameras(const SceneSpec& scene, const ProfileSpec& pro
     cam.time_s = k * c.frame_interval_s;
     cam.exposure_s = c.exposure_s;
     cam.focal_length_mm = c.focal_length_mm;
+    cam.f_number = c.f_number;
+    cam.focus_distance_m = c.focus_distance_m;
     cams.push_back(cam);
   }
   return cams;

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,7 +36,17 @@ struct CameraPathSpec {
   double sensor_width_mm = 36.0;
   double exposure_s = 1.0 / 60.0;
   double frame_interval_s = 0.5;  // time_s of view k is k * frame_interval_s
+  // A real lens (both or neither): f-number and focus distance written into every view. The focal
+  // length is focal_length_mm: with sensor_width_mm it sets the field of view as well.
+  std::optional<double> f_number, focus_distance_m;
 };
+
+// The closest pair of camera centres of a profile must be at least this fraction of the path size
+// (the largest distance between two centres). 0.02: at 16 views on a two-turn path the spacing of
+// neighbouring views is ~0.1-0.2 of the path, so 0.02 only rejects coinciding or nearly coinciding views.
+inline constexpr double kMinCameraSeparationFraction = 0.02;
+// Closest pair of camera centres divided by the largest distance between two centres (1 for < 2 views).
+double min_camera_separation_fraction(const std::vector<Camera>& cameras);
 
 struct VariantSpec {
   std::string name;   // e.g. "snow"; the dataset's `weather`

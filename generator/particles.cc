@@ -64,6 +64,9 @@ void SpeciesOptions::validate(const std::string& where) const {
   if (size_classes < 1 || size_classes > 64) bad("size_classes must be in [1, 64]");
   if (!(opacity > 0 && opacity <= 1)) bad("opacity must be in (0, 1]");
   if (!(particles_per_cell >= 1 && particles_per_cell <= 1000)) bad("particles_per_cell must be in [1, 1000]");
+  if (!(size_scale >= 1 && size_scale <= 100)) bad("size_scale must be in [1, 100], got " + std::to_string(size_scale));
+  if (!(density_scale > 0 && density_scale <= 100))
+    bad("density_scale must be in (0, 100], got " + std::to_string(density_scale));
   for (int i = 0; i < 2; ++i) {
     if (!(flutter_amplitude_m[i] >= 0 && flutter_amplitude_m[i] <= 10)) bad("flutter amplitude_m must be in [0, 10]");
     if (!(flutter_frequency_hz[i] >= 0 && flutter_frequency_hz[i] <= 100)) bad("flutter frequency_hz must be in [0, 100]");
@@ -81,11 +84,11 @@ physics::ExponentialSizeDistribution SpeciesOptions::distribution() const {
 }
 
 double SpeciesOptions::visual_radius_m(double d_mm) const {
-  if (species == Species::kSnow) return 0.5e-3 * physics::snow_flake_diameter_mm(d_mm);
+  if (species == Species::kSnow) return size_scale * 0.5e-3 * physics::snow_flake_diameter_mm(d_mm);
   // An oblate spheroid of axis ratio r = b/a and equal volume seen from the side has area
   // pi r_eq^2 r^(1/3); the equal-area disk has radius r_eq r^(1/6).
   const double r = oblate ? physics::beard_chuang_axis_ratio(d_mm) : 1.0;
-  return 0.5e-3 * d_mm * std::pow(r, 1.0 / 6.0);
+  return size_scale * 0.5e-3 * d_mm * std::pow(r, 1.0 / 6.0);
 }
 
 double SpeciesOptions::fall_speed_m_s(double d_mm) const {
@@ -103,7 +106,7 @@ ParticleField::ParticleField(const SpeciesOptions& options, uint64_t seed)
     SizeClass c;
     c.lo_mm = options.d_min_mm * std::pow(options.d_max_mm / options.d_min_mm, double(k) / n);
     c.hi_mm = options.d_min_mm * std::pow(options.d_max_mm / options.d_min_mm, double(k + 1) / n);
-    c.number_density_m3 = dist.number_density_m3(c.lo_mm, c.hi_mm);
+    c.number_density_m3 = options.density_scale * dist.number_density_m3(c.lo_mm, c.hi_mm);
     c.frame_fall_m_s = options.fall_speed_m_s(0.5 * (c.lo_mm + c.hi_mm));
     // Cells of at most 2 m follow the thin apex and edges of a frustum closely for sparse classes.
     c.cell_m = std::clamp(std::cbrt(options.particles_per_cell / std::max(c.number_density_m3, 1e-12)), 0.05, 2.0);

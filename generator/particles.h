@@ -38,6 +38,9 @@ struct SpeciesOptions {
   double flutter_frequency_hz[2] = {0.5, 2.0};
   double opacity = 1.0;              // peak alpha of a particle's image (snow is translucent)
   double particles_per_cell = 32;    // expected particles per cell (sets the cell size)
+  // The paper style's exaggerations (docs/generator.md, "Styles"); 1 = physical.
+  double size_scale = 1.0;         // multiplies every particle's visual radius
+  double density_scale = 1.0;        // multiplies the number density of every size class
 
   void validate(const std::string& where) const;
   physics::ExponentialSizeDistribution distribution() const;

@@ -60,4 +60,19 @@ constexpr double kGravity_m_s2 = 9.80665;
 // = 3.6e6 (mm/h per m/s) * 1e-9 (m^3 per mm^3) * pi/6 (sphere volume / D^3).
 constexpr double kRainRateFactor = 6e-4 * kPi;
 
+// Named intensities (a weather spec's "intensity" instead of "rate_mm_h"), docs/generator.md.
+// Rain: the WMO reference classes of rain rate (WMO Guide to Instruments and Methods of Observation,
+// WMO-No. 8, as adopted by national services; the US AMS glossary uses 2.5 / 7.6 mm/h): light <= 2.5,
+// moderate 2.5-10, heavy 10-50, violent > 50 mm/h. The rate used for class i is the geometric mean of
+// bounds i and i + 1: light spans 0.25-2.5 (0.25 being the "very light" limit) and the open-ended
+// class gets 2x its lower bound as the upper one. Rain: 0.79, 5.0, 22.4, 70.7 mm/h.
+constexpr double kRainClassBounds_mm_h[5] = {0.25, 2.5, 10.0, 50.0, 100.0};
+// Snow, by water-equivalent rate: light < 1, moderate 1-5, heavy >= 5 mm/h (the usual practice of
+// weather services; not confirmed here from a primary source). Snow intensity is also defined by
+// visibility (AMS glossary, US NWS: light > 1 km, moderate 0.5-1 km, heavy < 0.5 km); the generator
+// reports the visibility its particles give in docs/scenes.md. There is no "violent" snow class: we
+// define it as >= 4x the heavy threshold (20 mm/h, the rate of intense lake-effect bands). Same
+// geometric-mean rule: snow 0.5, 2.24, 10.0, 28.3 mm/h water equivalent.
+constexpr double kSnowClassBounds_mm_h[5] = {0.25, 1.0, 5.0, 20.0, 40.0};
+
 }  // namespace weathergs::physics

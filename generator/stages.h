@@ -41,10 +41,15 @@ struct WeatherView {
   Json lens_drops;                           // set by the lens stage: generator.lens_droplets.views
 };
 
+// What a stage adds: the restoration targets (docs/generator.md) re-run the stages without the
+// particle ones (no-particle target) or with the lens ones only (lens-only target).
+enum class StageKind { kFog, kParticles, kLens };
+
 class WeatherStage {
  public:
   virtual ~WeatherStage() = default;
   virtual std::string name() const = 0;
+  virtual StageKind kind() const = 0;
   // Called concurrently for different views: must not modify the stage.
   virtual void run(WeatherView& view) const = 0;
 };
@@ -55,6 +60,7 @@ class FogStage : public WeatherStage {
  public:
   FogStage(double beta_per_m, const Eigen::Vector3f& airlight) : beta_(beta_per_m), airlight_(airlight) {}
   std::string name() const override { return "fog"; }
+  StageKind kind() const override { return StageKind::kFog; }
   void run(WeatherView& view) const override;
 
  private:
@@ -68,6 +74,7 @@ class ParticleStage : public WeatherStage {
  public:
   ParticleStage(const ParticleEffectSpec& effect, const RenderOptions& render, uint64_t seed, bool manifest);
   std::string name() const override { return to_string(field_.options().species); }
+  StageKind kind() const override { return StageKind::kParticles; }
   void run(WeatherView& view) const override;
   const ParticleField& field() const { return field_; }
 
@@ -76,6 +83,20 @@ class ParticleStage : public WeatherStage {
   ParticleAppearance appearance_;
   RenderOptions render_;
   bool manifest_;
+};
+
+// The paper style's per-view 2D layer (generator/overlay.h): radiance = (1 - A) radiance +
+// A (brightness x sky); adds A into particle_alpha and writes layers/<species>_overlay_alpha.
+class OverlayStage : public WeatherStage {
+ public:
+  OverlayStage(const OverlayOptions& options, uint64_t seed) : options_(options), seed_(seed) {}
+  std::string name() const override { return std::string(to_string(options_.species)) + "_overlay"; }
+  StageKind kind() const override { return StageKind::kParticles; }
+  void run(WeatherView& view) const override;
+
+ private:
+  OverlayOptions options_;
+  uint64_t seed_;
 };
 
 // Cells of class k of the field that can hold a particle visible in the view (frustum from near_m

@@ -13,6 +13,7 @@
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "generator/lens/lens_stage.h"
+#include "generator/overlay.h"
 #include "generator/stages.h"
 
 #include "generator/weather_spec.h"
@@ -40,6 +41,11 @@ std::vector<std::unique_ptr<WeatherStage>> make_stages(const WeatherSpec& spec, 
   if (spec.fog) stages.push_back(std::make_unique<FogStage>(spec.fog->beta_per_m, airlight));
   if (spec.rain) stages.push_back(std::make_unique<ParticleStage>(*spec.rain, spec.render, spec.seed, manifest));
   if (spec.snow) stages.push_back(std::make_unique<ParticleStage>(*spec.snow, spec.render, spec.seed, manifest));
+  // The paper style's per-view 2D layers come after the world-space particles (the paper's OpenCV
+  // step ran on the rendered images).
+  for (const auto* effect : {&spec.rain, &spec.snow})
+    if (*effect && (*effect)->overlay && (*effect)->overlay->count_per_mpx > 0)
+      stages.push_back(std::make_unique<OverlayStage>(*(*effect)->overlay, spec.seed));
   // Lens droplets last: the drops on the glass see the weathered scene (docs/lens_droplets.md).
   if (spec.lens_droplets)
     stages.push_back(std::make_unique<lens::LensDropletStage>(*spec.lens_droplets, spec.seed, reference));
@@ -85,7 +91,7 @@ std::array<double, 3> estimate_sky_radiance(const Image& img) {
 Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, const std::string& out_dir,
                  const WeatherRunOptions& options) {
   options.validate();
-  WeatherSpec spec = parse_weather_spec(spec_reader);
+  WeatherSpec spec = parse_weather_spec(spec_reader, options.style);
   if (options.seed) spec.seed = *options.seed;
   const Dataset clean = read_dataset(clean_dir);
 
@@ -138,6 +144,8 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
   Dataset result;
   result.root = root.string();
   for (ImageKind k : {ImageKind::kImages, ImageKind::kClean, ImageKind::kDepth}) fs::create_directories(result.dir(k));
+  if (options.write_targets)
+    for (ImageKind k : {ImageKind::kTargetNoParticles, ImageKind::kTargetLensOnly}) fs::create_directories(result.dir(k));
 
   const size_t n_views = cameras.size();
   std::vector<std::vector<double>> seconds(n_views, std::vector<double>(stages.size(), 0.0));
@@ -167,6 +175,17 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
     }
     require_finite(view.radiance, "internal: weathered view '" + cam.name + "'");
     write_image(result.path(ImageKind::kImages, cam.name), view.radiance);
+    if (options.write_targets) {
+      // The same stages (same seed, same drops) without the particle stages, and the lens alone on
+      // the clean view: exact targets for the restoration filters (docs/generator.md, "Targets").
+      WeatherView no_particles(cam, clean_img, depth, env), lens_only(cam, clean_img, depth, env);
+      for (const auto& stage : stages) {
+        if (stage->kind() != StageKind::kParticles) stage->run(no_particles);
+        if (stage->kind() == StageKind::kLens) stage->run(lens_only);
+      }
+      write_image(result.path(ImageKind::kTargetNoParticles, cam.name), no_particles.radiance);
+      write_image(result.path(ImageKind::kTargetLensOnly, cam.name), lens_only.radiance);
+    }
     if (fs::path(src).extension() == layout::kImageExt) fs::copy_file(src, result.path(ImageKind::kClean, cam.name));
     else write_image(result.path(ImageKind::kClean, cam.name), clean_img);
     fs::copy_file(depth_path, result.path(ImageKind::kDepth, cam.name));
@@ -233,7 +252,8 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
   block["stages"] = stages_before;
   block["sky_radiance"] = {sky[0], sky[1], sky[2]};
   block["counters"] = total_counters;
-  block["outputs"] = {{"mask_threshold", options.mask_threshold}, {"float_layers", layers}, {"manifests", texts}};
+  block["outputs"] = {{"mask_threshold", options.mask_threshold}, {"float_layers", layers}, {"manifests", texts},
+                      {"targets", options.write_targets}};
   if (spec.fog) block["airlight"] = {airlight[0], airlight[1], airlight[2]};
   if (spec.lens_droplets) block["lens_droplets"] = {{"views", lens_drops}};  // cameras.json order
 

@@ -10,6 +10,8 @@
 //   clean/<view>.png            the clean views, copied
 //   depth/<view>.exr            copied; sparse/ and transforms.json copied when present (copy_exports)
 //   masks/particles/<view>.png  particle alpha >= mask_threshold (when a particle effect ran)
+//   targets/no_particles/<view>.png, targets/lens_only/<view>.png   with write_targets: the view with
+//                               every stage but the particle ones, and the clean view with the lens only
 //   layers/particle_alpha/<view>.exr, layers/<species>_alpha/<view>.exr, layers/fog_transmittance/
 //   layers/particles_<species>/<view>.csv   the per-particle manifest (docs/generator.md)
 //   cameras.json                the cameras with the spec's camera overrides applied
@@ -27,6 +29,7 @@
 
 #include "core/image.h"
 #include "core/json_reader.h"
+#include "generator/weather_spec.h"
 
 namespace weathergs {
 
@@ -38,6 +41,8 @@ struct WeatherRunOptions {
   bool write_layers = true;              // layers/*.exr (float alpha, fog transmittance)
   bool write_manifest = true;            // layers/particles_<species>/<view>.csv
   double mask_threshold = 0.02;          // masks/particles: particle alpha >= this, in (0, 1]
+  bool write_targets = false;            // targets/no_particles and targets/lens_only (docs/generator.md)
+  std::optional<WeatherStyle> style;     // overrides the spec's "style" (physical ignores paper blocks)
   bool copy_exports = true;              // copy the input's sparse/ and transforms.json (false when the
                                          // caller writes its own, as datagen's generate does)
 

@@ -4,10 +4,25 @@
 
 #include "core/error.h"
 #include "generator/physics.h"
+#include "generator/physics_constants.h"
 
 namespace weathergs {
 
 namespace {
+
+// Paper-style exaggerations (docs/generator.md, "Styles"). The paper's Blender particles were objects
+// of centimetres, nearly opaque: these scales bring our drops (0.5-3 mm radius) and flakes
+// (1-5 mm) to that size; the populated distance is cut to the scene's depth so the count stays
+// affordable.
+constexpr double kPaperRainSizeScale = 6.0;
+constexpr double kPaperSnowSizeScale = 3.0;
+constexpr double kPaperRainOpacity = 1.0;
+constexpr double kPaperSnowOpacity = 0.95;
+constexpr double kPaperMaxDistanceM = 15.0;
+// Paper style draws a particle only where it reaches 10% alpha: no haze of faint distant particles
+// (which made 98% of a view "particle" at the physical 1% cutoff), and ~10x less work.
+constexpr double kPaperVisibilityCutoff = 0.1;
+
 
 // Turbulence rms as a fraction of the mean wind speed when not given (turbulence intensity of the
 // surface layer, typically 0.1..0.3).
@@ -23,7 +38,7 @@ void read_range(const JsonReader& r, const std::string& key, double out[2]) {
   out[0] = v[0], out[1] = v[1];
 }
 
-ParticleEffectSpec parse_particles(const JsonReader& r, Species species) {
+ParticleEffectSpec parse_particles(const JsonReader& r, Species species, WeatherStyle style, bool ignore_paper) {
   if (!r.is_object()) throw InputError(r.where(), "expected an object");
   ParticleEffectSpec e;
   SpeciesOptions& o = e.species;
@@ -36,7 +51,18 @@ ParticleEffectSpec parse_particles(const JsonReader& r, Species species) {
     e.appearance.environment_weight = 0.5;
     e.appearance.sky_weight = 0.7;
   }
-  o.rate_mm_h = r.get<double>("rate_mm_h");
+  // A rate or a named intensity. Both only as in a resolved spec (dataset.json), where they must agree.
+  if (!r.has("intensity") && !r.has("rate_mm_h"))
+    r.fail("rate_mm_h", "a rate (\"rate_mm_h\": mm/h) or a named \"intensity\" (light, moderate, heavy, violent)");
+  if (r.has("intensity")) {
+    e.intensity = r.get_enum("intensity", {Intensity::kLight, Intensity::kModerate, Intensity::kHeavy, Intensity::kViolent});
+    o.rate_mm_h = intensity_rate_mm_h(species, *e.intensity);
+    if (r.has("rate_mm_h") && std::abs(r.get<double>("rate_mm_h") - o.rate_mm_h) > 1e-9 * o.rate_mm_h)
+      throw InputError(r.where("rate_mm_h"), "intensity \"" + std::string(to_string(*e.intensity)) + "\" means " +
+                                                 std::to_string(o.rate_mm_h) + " mm/h: give one of the two");
+  } else {
+    o.rate_mm_h = r.get<double>("rate_mm_h");
+  }
   o.wind.mean_m_s = read_vec3(r, "wind_m_s", Eigen::Vector3d::Zero());
   o.wind.turbulence_rms_m_s = kDefaultTurbulenceIntensity * o.wind.mean_m_s.norm();
   if (r.has("turbulence")) {
@@ -50,6 +76,28 @@ ParticleEffectSpec parse_particles(const JsonReader& r, Species species) {
   double range[2] = {o.d_min_mm, o.d_max_mm};
   read_range(r, "diameter_range_mm", range);
   o.d_min_mm = range[0], o.d_max_mm = range[1];
+  const bool paper = style == WeatherStyle::kPaper;
+  if (paper) {
+    // Paper-style defaults (docs/generator.md, "Styles"): what explicit keys below may still override.
+    o.size_scale = snow ? kPaperSnowSizeScale : kPaperRainSizeScale;
+    o.opacity = snow ? kPaperSnowOpacity : kPaperRainOpacity;
+    e.appearance.environment_weight = snow ? 0.3 : 0.6;
+    e.appearance.sky_weight = snow ? 1.2 : 0.8;
+    e.overlay = OverlayOptions::defaults(species);
+  }
+  if (r.has("paper") && (ignore_paper || !paper)) {
+    if (!ignore_paper)
+      throw InputError(r.where("paper"), "paper-style parameters need \"style\": \"paper\" at the top of the spec");
+    r.mark("paper");
+  } else if (r.has("paper")) {
+    JsonReader pp = r.child("paper");
+    if (!pp.is_object()) throw InputError(pp.where(), "expected an object {size_scale, density_scale, overlay}");
+    o.size_scale = pp.get_number_or("size_scale", o.size_scale, 1, 100);
+    o.density_scale = pp.get_number_or("density_scale", o.density_scale, 1e-3, 100);
+    if (pp.has("overlay")) e.overlay = OverlayOptions::from_json(pp.child("overlay"), *e.overlay);
+    pp.finish();
+  }
+  if (e.overlay) e.overlay->rate_scale = o.rate_mm_h / intensity_rate_mm_h(species, Intensity::kHeavy);
   o.size_classes = r.get_or<int>("size_classes", o.size_classes);
   o.particles_per_cell = r.get_or<double>("particles_per_cell", o.particles_per_cell);
   o.opacity = r.get_or<double>("opacity", o.opacity);
@@ -88,6 +136,11 @@ Json particles_to_json(const ParticleEffectSpec& e) {
             {"opacity", o.opacity},
             {"appearance", {{"environment_weight", e.appearance.environment_weight},
                             {"sky_weight", e.appearance.sky_weight}}}};
+  if (e.intensity) j["intensity"] = to_string(*e.intensity);
+  if (o.size_scale != 1 || o.density_scale != 1 || e.overlay) {
+    j["paper"] = {{"size_scale", o.size_scale}, {"density_scale", o.density_scale}};
+    if (e.overlay) j["paper"]["overlay"] = e.overlay->to_json();
+  }
   if (o.species == Species::kRain) {
     j["oblate"] = o.oblate;
   } else {
@@ -98,6 +151,24 @@ Json particles_to_json(const ParticleEffectSpec& e) {
 }
 
 }  // namespace
+
+const char* to_string(WeatherStyle style) { return style == WeatherStyle::kPaper ? "paper" : "physical"; }
+
+const char* to_string(Intensity i) {
+  switch (i) {
+    case Intensity::kLight: return "light";
+    case Intensity::kModerate: return "moderate";
+    case Intensity::kHeavy: return "heavy";
+    case Intensity::kViolent: return "violent";
+  }
+  WGS_CHECK(false);
+}
+
+double intensity_rate_mm_h(Species species, Intensity intensity) {
+  const double* b = species == Species::kRain ? physics::kRainClassBounds_mm_h : physics::kSnowClassBounds_mm_h;
+  const int i = int(intensity);
+  return std::sqrt(b[i] * b[i + 1]);
+}
 
 Camera CameraOverrides::apply(Camera c) const {
   if (exposure_s) c.exposure_s = *exposure_s;
@@ -136,6 +207,7 @@ Json WeatherSpec::to_json() const {
   }
   if (lens_droplets) effects["lens_droplets"] = lens::lens_droplet_spec_to_json(*lens_droplets);
   return {{"seed", seed},
+          {"style", to_string(style)},
           {"camera", cam},
           {"render",
            {{"streak", to_string(render.streak)},
@@ -148,9 +220,17 @@ Json WeatherSpec::to_json() const {
           {"effects", effects}};
 }
 
-WeatherSpec parse_weather_spec(const JsonReader& r) {
+WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> style_override) {
   if (!r.is_object()) throw InputError(r.where(), "expected a weather spec object");
   WeatherSpec spec;
+  spec.style = r.get_enum_or("style", WeatherStyle::kPhysical, {WeatherStyle::kPhysical, WeatherStyle::kPaper});
+  const bool ignore_paper = style_override && *style_override == WeatherStyle::kPhysical;
+  if (style_override) spec.style = *style_override;
+  // Paper style: the particles live in the scene (the paper's Blender emitters), not 50 m out.
+  if (spec.style == WeatherStyle::kPaper) {
+    spec.render.max_distance_m = kPaperMaxDistanceM;
+    spec.render.visibility_cutoff = kPaperVisibilityCutoff;
+  }
   if (r.has("seed")) {
     const int64_t seed = r.get<int64_t>("seed");
     if (seed < 0) throw InputError(r.where("seed"), "expected a non-negative integer");
@@ -193,8 +273,8 @@ WeatherSpec parse_weather_spec(const JsonReader& r) {
   }
   JsonReader effects = r.child("effects");
   if (!effects.is_object()) throw InputError(effects.where(), "expected an object of effects");
-  if (effects.has("rain")) spec.rain = parse_particles(effects.child("rain"), Species::kRain);
-  if (effects.has("snow")) spec.snow = parse_particles(effects.child("snow"), Species::kSnow);
+  if (effects.has("rain")) spec.rain = parse_particles(effects.child("rain"), Species::kRain, spec.style, ignore_paper);
+  if (effects.has("snow")) spec.snow = parse_particles(effects.child("snow"), Species::kSnow, spec.style, ignore_paper);
   if (effects.has("fog")) {
     JsonReader f = effects.child("fog");
     if (!f.is_object()) throw InputError(f.where(), "expected an object");

@@ -11,6 +11,7 @@
 #include "core/camera.h"
 #include "core/json_reader.h"
 #include "generator/lens/lens_spec.h"
+#include "generator/overlay.h"
 #include "generator/particles.h"
 #include "generator/render.h"
 
@@ -22,9 +23,24 @@ struct CameraOverrides {
   Camera apply(Camera camera) const;
 };
 
+// Named intensities of an effect (physics_constants.h: the class bounds and their sources).
+enum class Intensity { kLight, kModerate, kHeavy, kViolent };
+const char* to_string(Intensity i);
+// The rain rate or snow water-equivalent rate (mm/h) a named intensity stands for.
+double intensity_rate_mm_h(Species species, Intensity intensity);
+
+// "physical": every particle as physics makes it (the default). "paper": WeatherGS's benchmark look,
+// exaggerated on purpose: larger, denser, more opaque particles on the same world-space state (so
+// they stay multi-view consistent) plus the per-view 2D overlay (not consistent, as in the paper).
+// docs/generator.md, "Styles", lists every exaggeration and its default.
+enum class WeatherStyle { kPhysical, kPaper };
+const char* to_string(WeatherStyle style);
+
 struct ParticleEffectSpec {
   SpeciesOptions species;
   ParticleAppearance appearance;
+  std::optional<Intensity> intensity;     // set when the spec named an intensity instead of rate_mm_h
+  std::optional<OverlayOptions> overlay;  // paper style: the per-view 2D layer
 };
 
 struct FogSpec {
@@ -37,6 +53,7 @@ struct FogSpec {
 
 struct WeatherSpec {
   uint64_t seed = 0;
+  WeatherStyle style = WeatherStyle::kPhysical;
   CameraOverrides camera;
   RenderOptions render;
   std::optional<ParticleEffectSpec> rain, snow;
@@ -51,6 +68,8 @@ struct WeatherSpec {
 };
 
 // Strict: unknown keys, wrong types and out-of-range values are InputError with file and pointer.
-WeatherSpec parse_weather_spec(const JsonReader& spec);
+// `style_override` replaces the spec's "style"; overriding a paper spec with physical ignores its
+// "paper" blocks (that is what the override is for: the same scene variants in both styles).
+WeatherSpec parse_weather_spec(const JsonReader& spec, std::optional<WeatherStyle> style_override = std::nullopt);
 
 }  // namespace weathergs

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <limits>
 
 #include "core/atomic_file.h"
 #include "core/colmap_model.h"
@@ -18,6 +19,14 @@ namespace {
 constexpr const char* kRunFormat = "weathergs-3dgs-run";
 // 2: images/masks as named choices plus images_dir/masks_dir (1 mixed folder paths into the names).
 constexpr int kRunVersion = 2;
+
+Json schedule_json(const TrainOptions& e) {
+  return {{"densify_from", e.densify_from},
+          {"densify_until", e.densify_until},
+          {"densification_interval", e.densification_interval},
+          {"opacity_reset_interval", e.opacity_reset_interval},
+          {"sh_degree_interval", e.sh_degree_interval}};
+}
 
 Json optional_path(const std::string& p) { return p.empty() ? Json(nullptr) : Json(p); }
 
@@ -37,7 +46,8 @@ Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool c
               {"train_seconds", seconds},
               {"peak_rss_mb", peak_rss_mb()},
               {"extent", t.extent()},
-              {"options", t.options().to_json()}};
+              {"options", t.options().to_json()},
+              {"effective_schedule", schedule_json(t.effective_options())}};
 }
 
 struct RunInfo {
@@ -74,6 +84,7 @@ RunInfo read_run_json(const std::string& run_dir) {
   info.peak_rss_mb = r.get<double>("peak_rss_mb");
   r.get<double>("extent");
   info.options = TrainOptions::from_json(r.child("options"));
+  r.mark("effective_schedule");  // derived from options
   r.finish();
   return info;
 }
@@ -129,6 +140,37 @@ void RenderRunOptions::validate() const {
   for (const auto& [field, value] : {std::pair<const char*, const std::string*>{"model", &model}, {"out", &out},
                                      {"split", &split}, {"method", &method}})
     if (value->empty()) throw InputError("render options", std::string(field) + " is empty: it is required");
+  if (!(depth_min_opacity > 0 && depth_min_opacity <= 1))
+    throw InputError("render options",
+                     "depth_min_opacity is " + std::to_string(depth_min_opacity) + ", must be in (0, 1]");
+}
+
+std::vector<float> render_depth(const GaussianSet<float>& g, const Camera& camera, double min_opacity) {
+  // Two colour passes of the same rasterizer on a black background: colour = camera z of each
+  // Gaussian (SH degree 0) gives sum(w_i z_i); colour = 1 gives sum(w_i).
+  const RasterCamera<float> rc = RasterCamera<float>::from(camera);
+  GaussianSet<float> z_model = g, one_model = g;
+  const size_t n = g.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(g.position[3 * i], g.position[3 * i + 1], g.position[3 * i + 2]);
+    const double z = camera.to_camera(p).z();
+    for (int c = 0; c < 3; ++c) {
+      z_model.sh[i * 48 + size_t(c)] = float(rgb_to_sh0(std::max(z, 0.0)));
+      one_model.sh[i * 48 + size_t(c)] = float(rgb_to_sh0(1.0));
+    }
+  }
+  RasterSettings<float> rs;
+  rs.sh_degree = 0;
+  RasterState<float> state;
+  rasterize_forward(z_model, rc, rs, &state);
+  const std::vector<float> weighted = state.image;
+  rasterize_forward(one_model, rc, rs, &state);
+  std::vector<float> depth(size_t(camera.width) * size_t(camera.height));
+  for (size_t p = 0; p < depth.size(); ++p) {
+    const float w = state.image[3 * p];
+    depth[p] = w >= float(min_opacity) ? weighted[3 * p] / w : std::numeric_limits<float>::infinity();
+  }
+  return depth;
 }
 
 std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInputs& inputs) {
@@ -267,7 +309,10 @@ RenderRunResult render_run(const RenderRunOptions& o) {
   const RunInfo ri = read_run_json(o.model);
   const GaussianSet<float> g = read_ply((fs::path(o.model) / "point_cloud.ply").string());
   const Dataset dataset = read_dataset(o.dataset.empty() ? ri.dataset : o.dataset);
-  const auto& names = dataset.split(o.split);
+  // "all": every view of the dataset (e.g. depth for the weather generator).
+  std::vector<std::string> all_views;
+  for (const Camera& c : dataset.cameras) all_views.push_back(c.name);
+  const std::vector<std::string>& names = o.split == "all" ? all_views : dataset.split(o.split);
   RasterSettings<float> rs;
   rs.sh_degree = ri.sh_degree;
   for (int c = 0; c < 3; ++c) rs.background[c] = float(ri.options.background[c]);
@@ -281,7 +326,14 @@ RenderRunResult render_run(const RenderRunOptions& o) {
     result.render_seconds += seconds_since(t0);
     Image img(cam.width, cam.height, 3);
     for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = std::clamp(state.image[i], 0.f, 1.f);
-    write_image((fs::path(dir.path()) / (name + ".png")).string(), img);
+    write_image((fs::path(dir.path()) / (name + layout::kImageExt)).string(), img);
+    if (o.depth) {
+      const fs::path depth_dir = fs::path(dir.path()) / layout::kDepthDir;
+      fs::create_directories(depth_dir);
+      Image d(cam.width, cam.height, 1, ColorSpace::kLinear);
+      d.data = render_depth(g, cam, o.depth_min_opacity);
+      write_depth((depth_dir / (name + layout::kDepthExt)).string(), d);
+    }
     ++result.views;
   }
   const Json info{{"method", o.method},

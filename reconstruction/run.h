@@ -81,9 +81,19 @@ struct RenderRunOptions {
   std::string split = "test";
   std::string out;            // renders folder (replaced atomically)
   std::string method = "3dgs";
+  bool depth = false;         // also write <out>/depth/<view>.exr (planar depth, DATASET_FORMAT.md)
+  // Depth pixels whose accumulated opacity is below this are background (+inf): the model is too
+  // transparent there to say where the surface is.
+  double depth_min_opacity = 0.5;
 
-  void validate() const;  // InputError naming the field (model, out, split, method must be non-empty)
+  void validate() const;  // InputError naming the field and the rule
 };
+
+// Planar depth (camera z, m) of a trained model in one view: the opacity-weighted mean of the
+// Gaussians' camera depths along each pixel, sum(w_i z_i) / sum(w_i) with the blending weights
+// w_i = alpha_i T_i of the colour pass; +inf where sum(w_i) < min_opacity. Rendered with the colour
+// rasterizer itself (colours replaced by depth, then by one), so it follows its sorting and cut-offs.
+std::vector<float> render_depth(const GaussianSet<float>& g, const Camera& camera, double min_opacity);
 
 struct RenderRunResult {
   int views = 0;

@@ -101,6 +101,7 @@ Json TrainOptions::to_json() const {
               {"densification_interval", densification_interval},
               {"densify_grad_threshold", densify_grad_threshold},
               {"opacity_reset_interval", opacity_reset_interval},
+              {"schedule", to_string(schedule)},
               {"min_opacity", min_opacity},
               {"max_screen_size_px", max_screen_size_px},
               {"max_world_size", max_world_size},
@@ -108,6 +109,29 @@ Json TrainOptions::to_json() const {
               {"random_init_count", random_init_count},
               {"random_init_near_m", random_init_near_m},
               {"random_init_far_m", random_init_far_m}};
+}
+
+const char* to_string(TrainOptions::Schedule s) {
+  return s == TrainOptions::Schedule::kScaled ? "scaled" : "reference";
+}
+
+TrainOptions TrainOptions::effective() const {
+  constexpr int kReferenceIterations = 30000;
+  constexpr int kMinDensificationInterval = 10;  // gradient statistics over at least 10 views
+  TrainOptions e = *this;
+  if (schedule != Schedule::kScaled || iterations >= kReferenceIterations) return e;
+  const double s = double(iterations) / kReferenceIterations;
+  // Only fields still at the reference's value are scaled: a value set by hand is taken as given.
+  const TrainOptions ref;
+  auto scaled = [&](int v, int reference, int floor) {
+    return v == reference ? std::max(floor, int(std::lround(v * s))) : v;
+  };
+  e.densify_from = scaled(densify_from, ref.densify_from, 0);
+  e.densify_until = scaled(densify_until, ref.densify_until, 1);
+  e.densification_interval = scaled(densification_interval, ref.densification_interval, kMinDensificationInterval);
+  e.opacity_reset_interval = scaled(opacity_reset_interval, ref.opacity_reset_interval, 1);
+  e.sh_degree_interval = scaled(sh_degree_interval, ref.sh_degree_interval, 1);
+  return e;
 }
 
 TrainOptions TrainOptions::from_json(const JsonReader& r) {
@@ -132,6 +156,7 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.densification_interval = r.get_or("densification_interval", o.densification_interval);
   o.densify_grad_threshold = r.get_or("densify_grad_threshold", o.densify_grad_threshold);
   o.opacity_reset_interval = r.get_or("opacity_reset_interval", o.opacity_reset_interval);
+  o.schedule = r.get_enum_or("schedule", o.schedule, {Schedule::kReference, Schedule::kScaled});
   o.min_opacity = r.get_or("min_opacity", o.min_opacity);
   o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
   o.max_world_size = r.get_or("max_world_size", o.max_world_size);
@@ -192,8 +217,9 @@ double peak_rss_mb() {
 // Trainer
 
 Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const TrainOptions& options, double extent)
-    : views_(std::move(views)), options_(options), extent_(extent), g_(std::move(initial)) {
-  options_.validate("train options");
+    : views_(std::move(views)), requested_(options), options_(options.effective()), extent_(extent),
+      g_(std::move(initial)) {
+  options.validate("train options");
   WGS_CHECK(!views_.empty());
   WGS_CHECK(extent_ > 0);
   for (const TrainView& v : views_) {

@@ -42,6 +42,15 @@ struct TrainOptions {
   int max_screen_size_px = 20;        // see docs/reconstruction.md: inert as in the reference
   double max_world_size = 0.1;        // prune scale > this fraction of the extent (after first reset)
   std::array<double, 3> background = {0, 0, 0};  // sRGB in [0, 1]
+  // Short runs: the reference schedule (densify from 500 to 15000 every 100, reset opacity every
+  // 3000, SH degree + 1 every 1000) is made for 30000 iterations; run as is, `--iterations 3000` ends
+  // on a reset. kScaled (default) scales densify_from, densify_until, opacity_reset_interval and
+  // sh_degree_interval by s = iterations / 30000 (when s < 1) and densification_interval by s with a
+  // floor of 10, so every run has the reference's shape: densification and resets in the first half,
+  // the last reset at 40% of the run, the second half to recover. s >= 1 leaves the reference's.
+  // Only fields still at their reference value are scaled; a value set by hand is kept.
+  enum class Schedule { kReference, kScaled };
+  Schedule schedule = Schedule::kScaled;
   int random_init_count = 50000;      // Gaussians when the dataset has no COLMAP points
   double random_init_near_m = 0.5;    // depth range (m) of the random initialization
   double random_init_far_m = 20.0;
@@ -49,7 +58,10 @@ struct TrainOptions {
   void validate(const std::string& where) const;
   Json to_json() const;
   static TrainOptions from_json(const JsonReader& r);
+  // The options the trainer runs with: the schedule scaled to `iterations` (kScaled), else *this.
+  TrainOptions effective() const;
 };
+const char* to_string(TrainOptions::Schedule s);
 
 // One training image: camera, sRGB pixels in [0, 1] (H x W x 3) and an optional mask (H x W,
 // nonzero = masked out; empty = all valid).
@@ -90,7 +102,8 @@ class Trainer {
   int sh_degree() const { return sh_degree_; }
   const GaussianSet<float>& gaussians() const { return g_; }
   GaussianSet<float>& mutable_gaussians() { return g_; }  // tests inject faults through this
-  const TrainOptions& options() const { return options_; }
+  const TrainOptions& options() const { return requested_; }    // as given (run.json, resume)
+  const TrainOptions& effective_options() const { return options_; }  // with the scaled schedule
   double extent() const { return extent_; }
   // Index into views of the image used at a (1-based) iteration: a fresh permutation every epoch.
   int view_for_iteration(int iteration) const;
@@ -110,7 +123,7 @@ class Trainer {
   void check_finite_array(const std::vector<float>& a, ParamGroup group, int stride, const char* what) const;
 
   std::vector<TrainView> views_;
-  TrainOptions options_;
+  TrainOptions requested_, options_;
   double extent_;
   GaussianSet<float> g_, grad_, adam_m_, adam_v_;
   std::array<int64_t, 6> adam_steps_{};  // per ParamGroup

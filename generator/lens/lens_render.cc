@@ -332,10 +332,19 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
     for (int x = 0; x < w; ++x) {
       const float cov = std::clamp(row[x][3], 0.f, 1.f);
       res.coverage.at(x, y) = cov;
-      res.mask.at(x, y) = cov >= spec_.mask_threshold ? 1.f : 0.f;
+      if (spec_.mask_rule == LensMaskRule::kCoverage) res.mask.at(x, y) = cov >= spec_.mask_threshold ? 1.f : 0.f;
       if (cov == 0.f && row[x][0] == 0.f && row[x][1] == 0.f && row[x][2] == 0.f) continue;
-      for (int c = 0; c < 3; ++c)
-        res.image.at(x, y, c) = std::max(0.f, row[x][c]) + (1.f - cov) * image.at(x, y, c);
+      float change_levels = 0;
+      for (int c = 0; c < 3; ++c) {
+        const float out = std::max(0.f, row[x][c]) + (1.f - cov) * image.at(x, y, c);
+        res.image.at(x, y, c) = out;
+        // Perceptible change: the difference of the two 8-bit sRGB values this pixel would be written as.
+        const float q_out = std::round(255.f * std::clamp(linear_to_srgb(out), 0.f, 1.f));
+        const float q_in = std::round(255.f * std::clamp(linear_to_srgb(image.at(x, y, c)), 0.f, 1.f));
+        change_levels = std::max(change_levels, std::abs(q_out - q_in));
+      }
+      if (spec_.mask_rule == LensMaskRule::kPerceptible)
+        res.mask.at(x, y) = change_levels > float(spec_.mask_min_change_levels) ? 1.f : 0.f;
     }
   }
   return res;

@@ -11,6 +11,7 @@ const char* to_string(RadiusDistribution d) {
   return d == RadiusDistribution::kLogUniform ? "log_uniform" : "uniform";
 }
 const char* to_string(CapGeometry g) { return g == CapGeometry::kAnalytic ? "analytic" : "triangles"; }
+const char* to_string(LensMaskRule r) { return r == LensMaskRule::kPerceptible ? "perceptible" : "coverage"; }
 
 namespace {
 
@@ -74,6 +75,8 @@ LensDropletSpec parse_lens_droplet_spec(const JsonReader& r) {
     r.mark("environment_radiance");
   }
   s.defocus = r.get_or<bool>("defocus", s.defocus);
+  s.mask_rule = r.get_enum_or("mask_rule", s.mask_rule, {LensMaskRule::kPerceptible, LensMaskRule::kCoverage});
+  s.mask_min_change_levels = r.get_number_or("mask_min_change_levels", s.mask_min_change_levels, 0, 255);
   s.mask_threshold = r.get_or<double>("mask_threshold", s.mask_threshold);
   s.sampling_margin = r.get_or<double>("sampling_margin", s.sampling_margin);
   r.finish();
@@ -173,6 +176,8 @@ Json lens_droplet_spec_to_json(const LensDropletSpec& s) {
   else
     j["environment_radiance"] = "mean";
   j["defocus"] = s.defocus;
+  j["mask_rule"] = to_string(s.mask_rule);
+  j["mask_min_change_levels"] = s.mask_min_change_levels;
   j["mask_threshold"] = s.mask_threshold;
   j["sampling_margin"] = s.sampling_margin;
   return j;

@@ -19,11 +19,16 @@ enum class Attach { kLens, kWindow };
 enum class DropSide { kScene, kCamera };
 enum class RadiusDistribution { kLogUniform, kUniform };
 enum class CapGeometry { kAnalytic, kTriangles };
+// masks/lens: "perceptible" = where the drops change the 8-bit image by more than
+// mask_min_change_levels in some channel (what a method would see; defocused veils that change
+// nothing visible stay unmasked); "coverage" = where the blurred glass coverage >= mask_threshold.
+enum class LensMaskRule { kPerceptible, kCoverage };
 
 const char* to_string(Attach a);
 const char* to_string(DropSide s);
 const char* to_string(RadiusDistribution d);
 const char* to_string(CapGeometry g);
+const char* to_string(LensMaskRule r);
 
 // A window pane fixed in the world (attach "window"). normal_world points away from the cameras'
 // side; drops sit on the side named by drop_side. Drops are sampled on a size_m rectangle around
@@ -54,7 +59,9 @@ struct LensDropletSpec {
   int cap_segments = 48;                          // triangles geometry: segments around a cap
   std::optional<std::array<double, 3>> environment_radiance;  // unset: the view's mean radiance
   bool defocus = true;                            // thin-lens blur of the glass when known
-  double mask_threshold = 0.1;                    // mask where blurred coverage >= this
+  LensMaskRule mask_rule = LensMaskRule::kPerceptible;
+  double mask_min_change_levels = 4;              // perceptible rule: 8-bit sRGB levels (> this)
+  double mask_threshold = 0.1;                    // coverage rule: blurred coverage >= this
   double sampling_margin = 0.1;                   // lens attach: extra glass area sampled per side
 };
 

@@ -22,6 +22,7 @@ class LensDropletStage : public WeatherStage {
   LensDropletStage(const LensDropletSpec& spec, uint64_t seed, const Camera& reference)
       : renderer_(spec, seed, reference) {}
   std::string name() const override { return "lens_droplets"; }
+  StageKind kind() const override { return StageKind::kLens; }
   // The drops are placed at the view's shutter-open time (camera.time_s).
   void run(WeatherView& view) const override;
 

@@ -59,6 +59,28 @@ TEST(SceneSpecTest, ShippedScenesParse) {
   }
 }
 
+TEST(SceneSpecTest, EveryProfileHasDistinctViewsAndTestViewsBetweenTrainingViews) {
+  for (const char* name : {"tanabata.json", "factory.json", "pool.json"}) {
+    const SceneSpec s = read_scene_spec(scene_path(name));
+    for (const auto& [pname, profile] : s.profiles) {
+      const std::vector<Camera> cams = scene_cameras(s, profile);
+      EXPECT_GE(min_camera_separation_fraction(cams), kMinCameraSeparationFraction) << name << " " << pname;
+      // LLFF every-8th: each test view's nearest camera is a training view, never another test view.
+      for (size_t i = 0; i < cams.size(); i += size_t(s.split_every)) {
+        size_t nearest = i;
+        double best = 1e300;
+        for (size_t j = 0; j < cams.size(); ++j)
+          if (j != i) {
+            const double d = (cams[i].center_world() - cams[j].center_world()).norm();
+            if (d < best) best = d, nearest = j;
+          }
+        EXPECT_NE(nearest % size_t(s.split_every), 0u) << name << " " << pname << " view " << i;
+        EXPECT_GT(best, 0.0);
+      }
+    }
+  }
+}
+
 TEST(SceneSpecTest, CameraPathIsForwardFacing) {
   SceneSpec s = read_scene_spec(scene_path("pool.json"));
   const ProfileSpec& p = s.profile("paper");
@@ -106,6 +128,10 @@ TEST(SceneSpecTest, BadSpecsNameTheirLocation) {
   expect_input_error(
       [&] { read_scene_spec(write_modified(tmp, "pool.json", [](Json& j) { j["camera"]["look_at_m"] = j["camera"]["position_m"]; })); },
       "must differ");
+  // A two-turn path without the dolly revisits its poses: rejected before anything renders.
+  expect_input_error(
+      [&] { read_scene_spec(write_modified(tmp, "pool.json", [](Json& j) { j["camera"]["depth_m"] = 0.0; })); },
+      "views closer than");
   SceneSpec s = read_scene_spec(scene_path("pool.json"));
   expect_input_error([&] { s.profile("huge"); }, "no profile \"huge\"");
   expect_input_error([&] { s.variant("hail"); }, "no variant \"hail\"");

@@ -238,7 +238,7 @@ TEST(LensRenderTest, HardCasesStayFinite) {
   }
   // A drop larger than the image covers every pixel.
   LensViewResult big = LensDropletRenderer(spec_from(R"({"count": 1, "radius_mm": 1000,
-      "contact_angle_deg": 30, "sampling_margin": 0})"), 2, cam).render(img, cam, 0.0);
+      "contact_angle_deg": 30, "sampling_margin": 0, "mask_rule": "coverage"})"), 2, cam).render(img, cam, 0.0);
   EXPECT_EQ(mean(big.mask), 1.0);
   // Nearly flat drops leave the image as it was, up to the ~4 % Fresnel loss at two interfaces.
   LensViewResult flat = LensDropletRenderer(spec_from(R"({"count": 40, "contact_angle_deg": 0.01,
@@ -290,9 +290,22 @@ TEST(LensRenderTest, DefocusFollowsTheThinLensAndKeepsCoverageMass) {
   std::string flat_spec = text;
   flat_spec.replace(flat_spec.find("DEFOCUS"), 7, "true");
   EXPECT_LT(max_abs_diff(LensDropletRenderer(spec_from(flat_spec), 4, cam).render(flat, cam, 0.0).image, flat), 1e-5);
-  // The mask is the documented threshold of the blurred coverage.
-  for (size_t i = 0; i < blurred.mask.data.size(); ++i)
-    ASSERT_EQ(blurred.mask.data[i], blurred.coverage.data[i] >= 0.1f ? 1.f : 0.f);
+  // The default mask ("perceptible") marks exactly the pixels the drops change by more than 4 8-bit
+  // levels; the "coverage" rule is the documented threshold of the blurred coverage.
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      float change = 0;
+      for (int c = 0; c < 3; ++c) {
+        auto q = [](float v) { return std::round(255.f * std::clamp(linear_to_srgb(v), 0.f, 1.f)); };
+        change = std::max(change, std::abs(q(blurred.image.at(x, y, c)) - q(img.at(x, y, c))));
+      }
+      ASSERT_EQ(blurred.mask.at(x, y), change > 4.f ? 1.f : 0.f) << x << "," << y;
+    }
+  std::string coverage_spec = text;
+  coverage_spec.replace(coverage_spec.find("DEFOCUS"), 7, R"(true, "mask_rule": "coverage")");
+  const LensViewResult by_coverage = LensDropletRenderer(spec_from(coverage_spec), 4, cam).render(img, cam, 0.0);
+  for (size_t i = 0; i < by_coverage.mask.data.size(); ++i)
+    ASSERT_EQ(by_coverage.mask.data[i], by_coverage.coverage.data[i] >= 0.1f ? 1.f : 0.f);
 }
 
 TEST(LensRenderTest, TriangulatedCapsApproachAnalyticOnes) {

@@ -23,7 +23,7 @@ using testing::TempDir;
 const Json kLensSpec = {{"seed", 5},
                         {"effects",
                          {{"lens_droplets",
-                           {{"count", 25}, {"radius_mm", {1.5, 4.0}}, {"contact_angle_deg", {40, 110}}}}}}};
+                           {{"count", 25}, {"radius_mm", {1.5, 4.0}}, {"contact_angle_deg", {40, 110}}, {"mask_rule", "coverage"}}}}}};
 
 void run_cli(const std::string& in, const Json& spec, const std::string& out, int threads) {
   const std::string spec_path = out + ".spec.json";
