@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow demo clean
+.PHONY: all deps configure build test test-slow test-asan demo clean
 
 all: build
 
@@ -28,6 +28,18 @@ test: build
 	    echo "make test: tests were skipped, which CI does not allow:"; grep '\*\*\*Skipped' ctest.log; exit 1; fi; \
 	  exit $$status
 
+# The fast suite under AddressSanitizer + UndefinedBehaviorSanitizer (separate build tree; reports are
+# fatal). Last clean run: docs/reliability.md.
+ASAN_BUILD ?= build-asan
+test-asan: deps
+	cmake -S . -B $(ASAN_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DWEATHERGS_SANITIZE=ON \
+	  -DWEATHERGS_BUILD_BENCHMARKS=OFF
+	cmake --build $(ASAN_BUILD) -j $(JOBS)
+	cd $(ASAN_BUILD) && ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
+	  ctest --output-on-failure --label-exclude slow -j $(JOBS)
+
 test-slow: build
 	cd $(BUILD) && ctest --output-on-failure --label-regex slow
 
@@ -35,4 +47,4 @@ demo: build
 	bash scripts/demo.sh $(BUILD)/apps/weathergs demo_out
 
 clean:
-	rm -rf $(BUILD) demo_out
+	rm -rf $(BUILD) $(ASAN_BUILD) demo_out

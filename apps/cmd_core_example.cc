@@ -61,7 +61,8 @@ Image degrade(const Image& clean, const std::string& method, Rng& rng) {
 
 int run_example(const ExampleArgs& a) {
   if (a.width < 32 || a.height < 32 || a.views < 2)
-    throw InputError("example", "need at least 32x32 pixels and 2 views");
+    throw InputError("example", "width and height must be >= 32 and views >= 2, got width " + std::to_string(a.width) +
+                                    ", height " + std::to_string(a.height) + ", views " + std::to_string(a.views));
   AtomicDirectory out(a.out);
   const std::vector<std::string> scenes = {"park", "yard"}, weathers = {"rain", "snow"};
   const std::vector<std::string> methods = {"box-blur", "noise", "shift"};
