@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-asan demo clean
+.PHONY: all deps configure build test test-slow test-asan fuzz demo clean
 
 all: build
 
@@ -40,6 +40,17 @@ test-asan: deps
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp \
 	  ctest --output-on-failure --label-exclude slow -j $(JOBS)
 
+# libFuzzer harnesses (fuzz/README.md) in a clang build; FUZZ_SECONDS per harness (600 for the
+# documented runs).
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	bash scripts/install-deps.sh fuzz
+	cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-14 \
+	  -DWEATHERGS_FUZZ=ON -DWEATHERGS_BUILD_TESTS=OFF -DWEATHERGS_BUILD_BENCHMARKS=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS)
+	bash fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
+
 test-slow: build
 	cd $(BUILD) && ctest --output-on-failure --label-regex slow
 
@@ -47,4 +58,4 @@ demo: build
 	bash scripts/demo.sh $(BUILD)/apps/weathergs demo_out
 
 clean:
-	rm -rf $(BUILD) $(ASAN_BUILD) demo_out
+	rm -rf $(BUILD) $(ASAN_BUILD) $(FUZZ_BUILD) demo_out

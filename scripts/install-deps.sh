@@ -17,6 +17,14 @@ PACKAGES=(
   python3-numpy python3-skimage python3-matplotlib
 )
 
+# Optional groups, installed only when named: `install-deps.sh fuzz` (make fuzz).
+for group in "$@"; do
+  case "$group" in
+    fuzz) PACKAGES+=(clang-14 libclang-rt-14-dev) ;;
+    *) echo "install-deps: unknown group '$group' (known: fuzz)" >&2; exit 2 ;;
+  esac
+done
+
 missing=()
 for p in "${PACKAGES[@]}"; do
   if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
