@@ -1,0 +1,92 @@
+// Internal to the rasterizer (rasterizer.cc, raster_simd.cc): the per-pixel blend arithmetic shared
+// by the scalar templates and the float SIMD kernels, so that both compute identical values.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <initializer_list>
+#include <limits>
+#include <vector>
+
+#include "reconstruction/rasterizer.h"
+
+namespace weathergs::recon::internal {
+
+constexpr int64_t kGaussianChunk = 2048;  // per-Gaussian loops: work per parallel task
+constexpr int kEntryGrads = 9;
+constexpr int kTilePixels = kTileSize * kTileSize;
+
+template <typename T>
+inline bool all_finite(std::initializer_list<T> values) {
+  for (T v : values)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+// Integer tile index from a float coordinate, clamped before the conversion (huge or NaN inputs
+// would make the conversion undefined).
+template <typename T>
+inline int tile_floor_index(T v, int grid) {
+  const T c = std::clamp(v / T(kTileSize), T(0), T(grid));
+  return c == c ? int(c) : 0;
+}
+
+// exp for the blend weights. float: a branch-free Cody-Waite + degree-6 polynomial (Cephes expf,
+// within 2 ulp on [-87, 0]) that the compiler can vectorize, unlike libm's expf; double (the
+// finite-difference tests): std::exp. Arguments are <= 0 here; below -87 the result is 0-ish (1e-38).
+inline float blend_exp(float x) {
+  x = std::max(x, -87.0f);
+  const float t = x * 1.44269504088896341f;
+  const int n = int(t - 0.5f);  // round to nearest for t <= 0 (truncation toward zero)
+  const float fn = float(n);
+  float r = x - fn * 0.693359375f;
+  r = r - fn * -2.12194440e-4f;
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  const float y = p * r * r + r + 1.0f;
+  int32_t bits = (n + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, 4);
+  return y * scale;
+}
+inline double blend_exp(double x) { return std::exp(x); }
+
+// Half extent (px) of the region where a Gaussian's alpha can reach 1/255: the bounding box of the
+// ellipse d^T conic d <= 2 ln(255 o), widened by one pixel against rounding. Outside it the blend
+// skips every pixel anyway, so restricting the loops to it does not change the result. Negative
+// when the opacity alone is below 1/255 (alpha <= o can never reach it).
+template <typename T>
+inline T alpha_extent(T opacity, T cov_diag) {
+  if (!(opacity >= T(kAlphaMin))) return T(-1);
+  return std::sqrt(T(2) * std::log(T(255) * opacity) * cov_diag) + T(1);
+}
+
+// Pixel range [lo, hi] of centers (i + 0.5) within `half` of `mean`, clipped to [lo_clip, hi_clip].
+template <typename T>
+inline void pixel_range(T mean, T half, int lo_clip, int hi_clip, int* lo, int* hi) {
+  const T a = std::clamp(std::ceil(mean - half - T(0.5)), T(lo_clip), T(hi_clip + 1));
+  const T b = std::clamp(std::floor(mean + half - T(0.5)), T(lo_clip - 1), T(hi_clip));
+  *lo = int(a);
+  *hi = int(b);
+}
+
+// The blend weight of the reference: power of the 2D Gaussian at offset (dx, dy) and
+// alpha = min(0.99, o exp(power)); shared by forward and backward so both see identical values.
+template <typename T>
+inline T splat_power(T ca, T cb, T cc, T dx, T dy) {
+  return T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
+}
+
+// The float tile kernels (raster_simd.cc): 4 pixels at a time, lane by lane the same operations as
+// the scalar templates of rasterizer.cc.
+void render_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, int64_t tile);
+void backward_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, const std::vector<float>& v_image,
+                        int64_t tile);
+
+}  // namespace weathergs::recon::internal
