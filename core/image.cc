@@ -100,6 +100,12 @@ Image read_raw(const std::string& path, bool& is_float, std::vector<std::string>
     throw InputError(path, "image has no pixels");
   if (spec.nchannels > 4)
     throw InputError(path, "expected 1..4 channels, got " + std::to_string(spec.nchannels));
+  // A header may claim any size: refuse absurd ones before allocating (found by fuzz_image, whose
+  // corrupt PNG headers asked for gigabytes).
+  if (int64_t(spec.width) * spec.height > kMaxImagePixels || spec.width > kMaxImageSide || spec.height > kMaxImageSide)
+    throw InputError(path, "image of " + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                               " pixels is larger than the supported " + std::to_string(kMaxImagePixels / 1000000) +
+                               " megapixels (or " + std::to_string(kMaxImageSide) + " pixels a side)");
   is_float = spec.format.is_floating_point();
   if (names) *names = spec.channelnames;
   Image img(spec.width, spec.height, spec.nchannels, is_float ? ColorSpace::kLinear : ColorSpace::kSRGB);

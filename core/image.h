@@ -54,6 +54,10 @@ struct ImageReadOptions {
   bool linear = false;
 };
 
+// Largest image the readers accept (a header may claim any size): 100 megapixels, 65536 a side.
+inline constexpr int64_t kMaxImagePixels = 100000000;
+inline constexpr int kMaxImageSide = 65536;
+
 // Reads PNG (8/16-bit), JPEG, EXR, ... through OpenImageIO. Integer formats are sRGB-encoded in
 // [0,1]; float formats (EXR) are linear. Errors (missing, truncated, corrupt) are InputError.
 Image read_image(const std::string& path, const ImageReadOptions& options = {});

@@ -23,7 +23,7 @@ Json read_json_file(const std::string& path) {
   ss << in.rdbuf();
   try {
     return Json::parse(ss.str());
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // parse_error, and out_of_range for numbers beyond double (1e400)
     throw InputError(path, std::string("malformed JSON: ") + e.what());
   }
 }

@@ -1,5 +1,6 @@
 #include "datagen/generate.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -36,7 +37,16 @@ std::string cache_key(const SceneSpec& scene, const std::string& variant, const 
   Sha256 h;
   h.update(std::string(kCacheVersion) + "\n");
   h.update(job.dump() + "\n");
-  h.update(read_file(o.blender.script));
+  // The script and every module of its package: a change in any of them is a new render.
+  const fs::path scripts = fs::path(o.blender.script).parent_path();
+  std::vector<fs::path> files;
+  for (const auto& e : fs::recursive_directory_iterator(scripts))
+    if (e.is_regular_file() && e.path().extension() == ".py") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  for (const fs::path& f : files) {
+    h.update(fs::relative(f, scripts).generic_string() + "\n");
+    h.update(read_file(f.string()));
+  }
   h.update(std::string("colmap_oracle=") + (o.colmap ? "1" : "0"));
   return h.hex_digest().substr(0, 24);
 }

@@ -1,5 +1,7 @@
 #include "datagen/scene_spec.h"
 
+#include <iterator>
+
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -7,13 +9,14 @@
 
 #include "core/constants.h"
 #include "core/error.h"
+#include "datagen/scene_types.h"
 
 namespace weathergs::datagen {
 
 namespace fs = std::filesystem;
 
 const std::vector<std::string>& scene_types() {
-  static const std::vector<std::string> types = {"tanabata", "factory", "pool"};
+  static const std::vector<std::string> types(std::begin(generated::kSceneTypes), std::end(generated::kSceneTypes));
   return types;
 }
 

@@ -17,16 +17,26 @@
 
 namespace weathergs::fuzz {
 
+inline const std::string* scratch_dir_ptr();
+
 // A per-process scratch folder, removed at exit.
 inline const std::string& scratch_dir() {
-  static const std::string dir = [] {
-    const std::string d = std::filesystem::temp_directory_path().string() + "/weathergs_fuzz_" + std::to_string(::getpid());
-    std::filesystem::create_directories(d);
-    std::atexit([] { std::filesystem::remove_all(scratch_dir()); });
+  // Never freed, so that the atexit cleanup below cannot run after its destruction (a static
+  // std::string is destroyed before an atexit handler registered during its initialization runs).
+  static const std::string* dir = [] {
+    auto* d = new std::string(std::filesystem::temp_directory_path().string() + "/weathergs_fuzz_" +
+                              std::to_string(::getpid()));
+    std::filesystem::create_directories(*d);
+    std::atexit([] {
+      std::error_code ec;
+      std::filesystem::remove_all(*scratch_dir_ptr(), ec);
+    });
     return d;
   }();
-  return dir;
+  return *dir;
 }
+
+inline const std::string* scratch_dir_ptr() { return &scratch_dir(); }
 
 inline std::string write_input(const uint8_t* data, size_t size, const std::string& name) {
   const std::string path = scratch_dir() + "/" + name;

@@ -6,7 +6,9 @@
 #include <filesystem>
 #include <limits>
 
+#include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/image.h"
 #include "core/json_reader.h"
 #include "core/thin_lens.h"
 #include "tests/core/test_util.h"
@@ -108,6 +110,45 @@ TEST(JsonReaderHelpersTest, OneGrammarAndOneWording) {
   EXPECT_EQ(input_error([&] { r.get_enum("mbad", {Mode::kA, Mode::kB}); }),
             "spec.json:/mbad: expected one of \"a\", \"b\", got \"c\"");
   r.finish();  // every key above was read
+}
+
+// Found by fuzz_dataset, fuzz_scene_spec and fuzz_results (docs/reliability.md): a number beyond
+// double's range made nlohmann throw out_of_range, which escaped as an internal error.
+TEST(JsonReaderHelpersTest, NumberOverflowIsAnInputError) {
+  testing::TempDir dir;
+  for (const char* text : {R"({"format": 701e1701})", R"({"views": [{"fx": 33E89781}]})", "[4444e4444]", "-1e999"}) {
+    write_file_atomic(dir / "x.json", text);
+    const std::string msg = input_error([&] { read_json_file(dir / "x.json"); });
+    EXPECT_NE(msg.find("x.json"), std::string::npos) << text;
+    EXPECT_NE(msg.find("malformed JSON"), std::string::npos) << text;
+  }
+}
+
+// Found by fuzz_image: a PNG header may claim any size; the reader refuses absurd ones before it
+// allocates (a 100000 x 100000 RGB float image would be 120 GB).
+uint32_t crc32(const std::string& bytes) {
+  uint32_t c = 0xffffffffu;
+  for (unsigned char b : bytes) {
+    c ^= b;
+    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+  }
+  return ~c;
+}
+
+std::string be32(uint32_t v) {
+  return {char(v >> 24), char((v >> 16) & 0xff), char((v >> 8) & 0xff), char(v & 0xff)};
+}
+
+TEST(ImageReaderTest, AbsurdHeaderSizeIsAnInputErrorBeforeAllocating) {
+  testing::TempDir dir;
+  const std::string ihdr = "IHDR" + be32(100000) + be32(100000) + std::string("\x08\x02\x00\x00\x00", 5);
+  const std::string idat = "IDAT" + std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8);  // empty zlib stream
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + ihdr + be32(crc32(ihdr)) + be32(8) + idat +
+                          be32(crc32(idat)) + be32(0) + "IEND" + be32(crc32("IEND"));
+  write_file_atomic(dir / "huge.png", png);
+  const std::string msg = input_error([&] { read_image(dir / "huge.png"); });
+  EXPECT_NE(msg.find("huge.png"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("100000x100000"), std::string::npos) << msg;
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 // forward-facing, and a missing or failing Blender leaves no partial dataset behind.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <filesystem>
 #include <fstream>
 
@@ -56,6 +58,20 @@ TEST(SceneSpecTest, ShippedScenesParse) {
     // Variant lights override only what they name.
     EXPECT_EQ(s.variant("snow").lights["sun"]["elevation_deg"], s.lights["sun"]["elevation_deg"]);
     EXPECT_NE(s.variant("snow").lights["sun"]["strength"], s.lights["sun"]["strength"]);
+  }
+}
+
+TEST(SceneSpecTest, SceneTypesAreTheBlenderLayoutModules) {
+  // One list: the modules of blender_scripts/weathergs_blender/layouts/ (generated at build time).
+  std::vector<std::string> modules;
+  for (const auto& e : std::filesystem::directory_iterator(std::string(WEATHERGS_SOURCE_DIR) +
+                                                           "/blender_scripts/weathergs_blender/layouts"))
+    if (e.path().extension() == ".py" && e.path().stem().string()[0] != '_') modules.push_back(e.path().stem().string());
+  std::sort(modules.begin(), modules.end());
+  EXPECT_EQ(scene_types(), modules);
+  for (const char* name : {"tanabata.json", "factory.json", "pool.json"}) {
+    const SceneSpec s = read_scene_spec(scene_path(name));
+    EXPECT_NE(std::find(modules.begin(), modules.end(), s.type), modules.end()) << name;
   }
 }
 
