@@ -24,7 +24,7 @@ Json stats_json(const ModelStats& s) {
           {"mean_track_length", s.mean_track_length}, {"mean_reprojection_error_px", s.mean_reprojection_error_px}};
 }
 
-// Bumped whenever the meaning of a cached render changes without the job or the script changing.
+// Bumped whenever the meaning of a cached render changes without the job or the scripts changing.
 constexpr const char* kCacheVersion = "weathergs-clean-cache-v2";
 
 std::string cache_key(const SceneSpec& scene, const std::string& variant, const GenerateOptions& o) {

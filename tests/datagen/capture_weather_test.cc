@@ -38,11 +38,7 @@ TEST(CaptureWeather, ImportTrainRenderDepthWeather) {
   const int frames = 24, every = 2;
   const std::vector<Camera> truth = room_path(frames);
   const std::string video = tmp / "room.avi";
-  {
-    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(320, 240));
-    ASSERT_TRUE(writer.isOpened());
-    for (const Camera& c : truth) writer.write(render_room(c));
-  }
+  ASSERT_TRUE(write_room_video(video, truth)) << "OpenCV cannot write MJPG";
   ASSERT_EQ(run("import --video " + video + " --every 2 --weather clear --out " + (tmp / "room"), tmp / "import.log"), 0)
       << read_file(tmp / "import.log");
   ASSERT_EQ(run("train --data " + (tmp / "room") + " --iterations 1500 --seed 1 --out " + (tmp / "run"), tmp / "train.log"),

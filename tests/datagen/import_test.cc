@@ -33,11 +33,7 @@ TEST(ImportTest, VideoOfAKnownRoom) {
   const int frames = 24, every = 2;
   const std::vector<Camera> truth = room_path(frames);
   const std::string video = tmp / "room.avi";
-  {
-    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(320, 240));
-    ASSERT_TRUE(writer.isOpened()) << "OpenCV cannot write MJPG";
-    for (const Camera& c : truth) writer.write(render_room(c));
-  }
+  ASSERT_TRUE(write_room_video(video, truth)) << "OpenCV cannot write MJPG";
   ImportOptions o;
   o.video = video;
   o.every = every;

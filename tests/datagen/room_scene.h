@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,14 @@ inline std::vector<Camera> room_path(int n) {
     cams.push_back(c);
   }
   return cams;
+}
+
+// The footage: one 320x240 MJPG frame per camera at 10 fps. False if OpenCV cannot write it.
+inline bool write_room_video(const std::string& path, const std::vector<Camera>& cameras) {
+  cv::VideoWriter writer(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0, cv::Size(320, 240));
+  if (!writer.isOpened()) return false;
+  for (const Camera& c : cameras) writer.write(render_room(c));
+  return true;
 }
 
 }  // namespace weathergs::datagen
