@@ -54,8 +54,9 @@ struct ImageReadOptions {
   bool linear = false;
 };
 
-// Largest image the readers accept (a header may claim any size): 100 megapixels, 65536 a side.
-inline constexpr int64_t kMaxImagePixels = 100000000;
+// Largest image the readers accept (a header may claim any size): 50 megapixels (800 MB as RGBA
+// float), 65536 a side.
+inline constexpr int64_t kMaxImagePixels = 50000000;
 inline constexpr int kMaxImageSide = 65536;
 
 // Reads PNG (8/16-bit), JPEG, EXR, ... through OpenImageIO. Integer formats are sRGB-encoded in

@@ -15,8 +15,8 @@ for h in "${harnesses[@]}"; do
   [ -x "$exe" ] || { echo "fuzz_$h: not built"; status=1; continue; }
   mkdir -p "$BUILD/corpus/$h"
   log="$BUILD/fuzz_$h.log"
-  ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=$SRC/tests/lsan.supp "$exe" "$BUILD/corpus/$h" "$SRC/fuzz/corpus/$h" -max_total_time="$SECONDS_EACH" \
-    -rss_limit_mb=2048 -timeout=10 -max_len=65536 -artifact_prefix="$BUILD/crashes/$h-" -print_final_stats=1 \
+  ASAN_OPTIONS=detect_leaks=1:fast_unwind_on_malloc=0:quarantine_size_mb=64 LSAN_OPTIONS=suppressions=$SRC/tests/lsan.supp "$exe" "$BUILD/corpus/$h" "$SRC/fuzz/corpus/$h" -max_total_time="$SECONDS_EACH" \
+    -rss_limit_mb=3072 -timeout=10 -max_len=65536 -artifact_prefix="$BUILD/crashes/$h-" -print_final_stats=1 \
     > "$log" 2>&1
   rc=$?
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$')
