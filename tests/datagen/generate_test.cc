@@ -37,10 +37,13 @@ double mean_abs_diff(const Image& a, const Image& b) {
 }
 
 // COLMAP reads the model, its reprojection error is small, and it agrees with cameras.json.
-void check_model(const std::string& model_dir, const std::vector<Camera>& cameras, const ColmapOptions& o) {
+// min_points: the clean tiny views give > 20 points; the paper-style heavy rain with lens drops
+// hides most features at 192x128 (12 points measured on 2026-11-22), so its model needs only a few.
+void check_model(const std::string& model_dir, const std::vector<Camera>& cameras, const ColmapOptions& o,
+                 int min_points) {
   const ModelStats s = analyze_model(model_dir, o, model_dir + "/../analyzer.log");
   EXPECT_EQ(s.registered_images, int(cameras.size()));
-  EXPECT_GT(s.points, 20) << model_dir;
+  EXPECT_GT(s.points, min_points) << model_dir;
   EXPECT_LT(s.mean_reprojection_error_px, kMaxReprojectionErrorPx) << model_dir;
   const ColmapModel m = read_colmap_text(model_dir);
   ASSERT_EQ(m.images.size(), cameras.size());
@@ -108,8 +111,8 @@ TEST(GenerateTest, TinyRainVariantEndToEnd) {
     EXPECT_EQ(depth.width, 192);
   }
   EXPECT_GT(diff, 0.0) << "the weather pass changed nothing";
-  check_model(out + "/sparse/0", ds.cameras, o.colmap_options);
-  check_model(out + "/sparse_clean/0", ds.cameras, o.colmap_options);
+  check_model(out + "/sparse/0", ds.cameras, o.colmap_options, 4);
+  check_model(out + "/sparse_clean/0", ds.cameras, o.colmap_options, 20);
   EXPECT_EQ(ds.info.generator->at("colmap").at("sparse").at("points").get<int>(), s.sparse.points);
   // One straight line through dataset.json's generator block: render, then weather, then COLMAP,
   // each stage's entries as it wrote them.
