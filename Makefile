@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-asan fuzz demo clean
+.PHONY: all deps configure build test test-slow test-asan fuzz interop demo clean
 
 all: build
 
@@ -50,6 +50,15 @@ fuzz: deps
 	  -DWEATHERGS_FUZZ=ON -DWEATHERGS_BUILD_TESTS=OFF -DWEATHERGS_BUILD_BENCHMARKS=OFF
 	cmake --build $(FUZZ_BUILD) -j $(JOBS)
 	bash fuzz/run.sh $(FUZZ_BUILD) $(FUZZ_SECONDS)
+
+# Real clients read what we write (docs/interop.md): splat-transform, a Three.js splat viewer and the
+# HTML leaderboard in headless Debian Chromium. npm packages (pinned by interop/package-lock.json) go
+# to interop/node_modules; results to $(BUILD)/interop/report.json.
+interop: build
+	bash scripts/install-deps.sh interop
+	@if [ ! -f interop/node_modules/.package-lock.json ] || [ interop/package-lock.json -nt interop/node_modules/.package-lock.json ]; then \
+	  cd interop && npm ci --no-audit --no-fund; fi
+	bash interop/run.sh $(BUILD)
 
 test-slow: build
 	cd $(BUILD) && ctest --output-on-failure --label-regex slow

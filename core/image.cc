@@ -194,6 +194,11 @@ Image read_depth(const std::string& path) {
     if (std::isnan(z))
       throw InputError(path, "NaN depth at pixel (" + std::to_string(p % raw.width) + ", " +
                                  std::to_string(p / raw.width) + ")");
+    // Camera z of a visible surface is positive (+inf for the sky); a negative or zero value would
+    // otherwise pass silently (fog and rain then left such pixels untouched).
+    if (!(z > 0.f))
+      throw InputError(path, "depth " + std::to_string(z) + " at pixel (" + std::to_string(p % raw.width) + ", " +
+                                 std::to_string(p / raw.width) + ") is not positive (planar camera z in meters)");
     depth.data[p] = z;  // is_background_depth (core/dataset_layout.h): kept as they are
   }
   return depth;

@@ -17,11 +17,17 @@ PACKAGES=(
   python3-numpy python3-skimage python3-matplotlib
 )
 
-# Optional groups, installed only when named: `install-deps.sh fuzz` (make fuzz).
+# Optional groups, installed only when named: `install-deps.sh fuzz` (make fuzz), `install-deps.sh
+# interop` (make interop: headless Chromium; Node.js and npm unless a node is already on PATH, e.g.
+# from NodeSource; the npm packages themselves are pinned in interop/package.json).
 for group in "$@"; do
   case "$group" in
     fuzz) PACKAGES+=(clang-14 libclang-rt-14-dev) ;;
-    *) echo "install-deps: unknown group '$group' (known: fuzz)" >&2; exit 2 ;;
+    interop)
+      PACKAGES+=(chromium)
+      command -v node >/dev/null 2>&1 || PACKAGES+=(nodejs)
+      command -v npm >/dev/null 2>&1 || PACKAGES+=(npm) ;;
+    *) echo "install-deps: unknown group '$group' (known: fuzz, interop)" >&2; exit 2 ;;
   esac
 done
 

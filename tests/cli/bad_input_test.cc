@@ -58,6 +58,21 @@ void text(const std::string& path, const std::string& contents) {
   write_file_atomic(path, contents);
 }
 
+// A PNG signature and IHDR chunk (correct CRC) claiming width x height, then nothing: a reader must
+// reject it from the header, before allocating pixels.
+std::string png_header_only(uint32_t width, uint32_t height) {
+  auto be32 = [](uint32_t v) {
+    return std::string{char(v >> 24), char(v >> 16 & 255), char(v >> 8 & 255), char(v & 255)};
+  };
+  std::string chunk = "IHDR" + be32(width) + be32(height) + std::string{8, 2, 0, 0, 0};  // 8-bit RGB
+  uint32_t crc = 0xffffffffu;
+  for (unsigned char b : chunk) {
+    crc ^= b;
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xedb88320u & (0u - (crc & 1u)));
+  }
+  return std::string("\x89PNG\r\n\x1a\n", 8) + be32(13) + chunk + be32(~crc);
+}
+
 Json results_json() {
   return Json::parse(R"({"format": "weathergs-results", "version": 1, "method": "m", "dataset": "d", "scene": "s",
     "weather": "rain", "protocol": {"ssim": "gaussian11_sigma1.5_valid", "lpips": null, "quantize_uint8": true,
@@ -86,6 +101,11 @@ std::vector<Case> corpus() {
                "compare $T/small.png " + img_a + " --no-lpips", "small.png", ""});
   c.push_back({"compare: folder as image", [](const std::string& t) { fs::create_directories(t + "/dir.png"); },
                "compare $T/dir.png " + img_a + " --no-lpips", "dir.png", ""});
+  c.push_back({"compare: png header claiming 100000x100000",
+               [](const std::string& t) { text(t + "/huge.png", png_header_only(100000, 100000)); },
+               "compare $T/huge.png " + img_a + " --no-lpips", "huge.png", ""});
+  c.push_back({"compare: png header claiming 0x0", [](const std::string& t) { text(t + "/zero.png", png_header_only(0, 0)); },
+               "compare $T/zero.png " + img_a + " --no-lpips", "zero.png", ""});
   c.push_back({"compare: missing lpips model", {}, "compare " + img_a + " " + img_a + " --lpips-model $T/nope.onnx",
                "nope.onnx", ""});
   // evaluate
@@ -115,6 +135,8 @@ std::vector<Case> corpus() {
   c.push_back({"evaluate: extra render",
                [](const std::string& t) { write_image(t + "/renders/999.png", Image(96, 64, 3, ColorSpace::kSRGB)); },
                "evaluate --gt $D --renders $T/renders --method m --no-lpips -o $T/r.json", "999", "r.json"});
+  c.push_back({"evaluate: corrupt render", [](const std::string& t) { text(t + "/renders/000.png", "\x89PNG garbage"); },
+               "evaluate --gt $D --renders $T/renders --method m --no-lpips -o $T/r.json", "000.png", "r.json"});
   c.push_back({"evaluate: render of the wrong size",
                [](const std::string& t) { write_image(t + "/renders/000.png", Image(20, 10, 3, ColorSpace::kSRGB)); },
                "evaluate --gt $D --renders $T/renders --method m --no-lpips -o $T/r.json", "000", "r.json"});
@@ -147,6 +169,14 @@ std::vector<Case> corpus() {
                  text(t + "/v.json", r.dump());
                },
                "leaderboard $T/v.json", "v.json", ""});
+  c.push_back({"leaderboard: metric of the wrong type", [](const std::string& t) {
+                 Json r = results_json();
+                 r["metrics"]["psnr"] = "high";
+                 text(t + "/wt.json", r.dump());
+               },
+               "leaderboard $T/wt.json", "psnr", ""});
+  c.push_back({"leaderboard: html to an unwritable path", [](const std::string& t) { text(t + "/ok.json", results_json().dump()); },
+               "leaderboard $T/ok.json --format html -o /dev/null/lb.html", "/dev/null", ""});
   c.push_back({"leaderboard: missing file", {}, "leaderboard $T/missing.json", "missing.json", ""});
   c.push_back({"leaderboard: unknown table format", [](const std::string& t) { text(t + "/ok.json", results_json().dump()); },
                "leaderboard $T/ok.json --format docx", "docx", ""});
@@ -204,6 +234,44 @@ std::vector<Case> corpus() {
                  write_depth(t + "/nan/depth/002.exr", d);
                },
                "weather --in $T/nan --spec $T/spec.json --out $T/w", "002.exr", "w"});
+  c.push_back({"weather: negative depth", [](const std::string& t) {
+                 text(t + "/spec.json", R"({"effects": {"fog": {"visibility_m": 50}}})");
+                 copy_tree(t + "/data", t + "/neg");
+                 Image d = read_depth(t + "/neg/depth/003.exr");
+                 for (float& z : d.data) z = -z;
+                 write_depth(t + "/neg/depth/003.exr", d);
+               },
+               "weather --in $T/neg --spec $T/spec.json --out $T/w", "003.exr", "w"});
+  c.push_back({"weather: -inf depth", [](const std::string& t) {
+                 text(t + "/spec.json", R"({"effects": {"rain": {"rate_mm_h": 5}}})");
+                 copy_tree(t + "/data", t + "/ninf");
+                 Image d = read_depth(t + "/ninf/depth/004.exr");
+                 d.data[7] = -std::numeric_limits<float>::infinity();
+                 write_depth(t + "/ninf/depth/004.exr", d);
+               },
+               "weather --in $T/ninf --spec $T/spec.json --out $T/w", "004.exr", "w"});
+  c.push_back({"weather: truncated depth EXR", [](const std::string& t) {
+                 text(t + "/spec.json", R"({"effects": {"rain": {"rate_mm_h": 5}}})");
+                 copy_tree(t + "/data", t + "/trx");
+                 text(t + "/trx/depth/005.exr", read_file(t + "/trx/depth/005.exr").substr(0, 100));
+               },
+               "weather --in $T/trx --spec $T/spec.json --out $T/w", "005.exr", "w"});
+  c.push_back({"weather: text as depth EXR", [](const std::string& t) {
+                 text(t + "/spec.json", R"({"effects": {"rain": {"rate_mm_h": 5}}})");
+                 copy_tree(t + "/data", t + "/txx");
+                 text(t + "/txx/depth/006.exr", "not an exr");
+               },
+               "weather --in $T/txx --spec $T/spec.json --out $T/w", "006.exr", "w"});
+  c.push_back({"weather: 8-bit PNG bytes as depth EXR", [img_a](const std::string& t) {
+                 text(t + "/spec.json", R"({"effects": {"rain": {"rate_mm_h": 5}}})");
+                 copy_tree(t + "/data", t + "/pngx");
+                 text(t + "/pngx/depth/007.exr", read_file(img_a));
+               },
+               "weather --in $T/pngx --spec $T/spec.json --out $T/w", "007.exr", "w"});
+  c.push_back({"weather: zero fog visibility", spec(R"({"effects": {"fog": {"visibility_m": 0}}})"),
+               "weather --in $D --spec $T/spec.json --out $T/w", "visibility_m", "w"});
+  c.push_back({"weather: number beyond double", spec(R"({"effects": {"fog": {"visibility_m": 1e400}}})"),
+               "weather --in $D --spec $T/spec.json --out $T/w", "spec.json", "w"});
   c.push_back({"weather: image size mismatch", [](const std::string& t) {
                  text(t + "/spec.json", R"({"effects": {"rain": {"rate_mm_h": 5}}})");
                  copy_tree(t + "/data", t + "/sz");
@@ -252,6 +320,16 @@ std::vector<Case> corpus() {
                },
                "train --data $D --masks-dir $T/mk --out $T/run2", "mk/", "run2"});
   c.push_back({"train: missing image folder", {}, "train --data $D --images-dir $T/noimg --out $T/run2", "noimg", "run2"});
+  c.push_back({"train: truncated training image", [](const std::string& t) {
+                 copy_tree(t + "/data", t + "/tri");
+                 text(t + "/tri/images/003.png", read_file(t + "/tri/images/003.png").substr(0, 80));
+               },
+               "train --data $T/tri --iterations 2 --out $T/run2", "003.png", "run2"});
+  c.push_back({"train: training image of the wrong size", [](const std::string& t) {
+                 copy_tree(t + "/data", t + "/wsi");
+                 write_image(t + "/wsi/images/004.png", Image(12, 8, 3, ColorSpace::kSRGB));
+               },
+               "train --data $T/wsi --iterations 2 --out $T/run2", "004", "run2"});
   c.push_back({"train: zero iterations", {}, "train --data $D --iterations 0 --out $T/run2", "iterations", "run2"});
   c.push_back({"train: negative random init count", {}, "train --data $D --random-init-count -5 --out $T/run2",
                "random_init_count", "run2"});
@@ -269,6 +347,12 @@ std::vector<Case> corpus() {
                },
                "train --resume --out $T/badck", "checkpoint.bin", ""});
   // render
+  c.push_back({"render: truncated PLY", [](const std::string& t) {
+                 copy_tree(t + "/run", t + "/trply");
+                 const std::string ply = read_file(t + "/trply/point_cloud.ply");
+                 write_file_atomic(t + "/trply/point_cloud.ply", ply.substr(0, ply.size() - 7));
+               },
+               "render --model $T/trply --out $T/rr", "point_cloud.ply", "rr"});
   c.push_back({"render: missing model", {}, "render --model $T/nomodel --out $T/rr", "nomodel", "rr"});
   c.push_back({"render: run from another version", [](const std::string& t) {
                  copy_tree(t + "/run", t + "/oldrun2");

@@ -57,6 +57,24 @@ TEST(ImageTest, ExrIsLinearAndDepthChannelZ) {
   for (size_t i = 0; i < depth.data.size(); ++i) EXPECT_EQ(back.data[i], depth.data[i]);
 }
 
+// Regression (bad-input corpus): a negative depth was accepted, and `weather` then silently left the
+// fog out of those pixels (exit 0).
+TEST(ImageTest, NonPositiveDepthIsAnInputErrorNamingThePixel) {
+  TempDir dir;
+  for (const float bad : {-2.5f, 0.f, -INFINITY}) {
+    Image depth(4, 3, 1, ColorSpace::kLinear, 3.f);
+    depth.at(2, 1, 0) = bad;
+    write_depth(dir / "d.exr", depth);
+    try {
+      read_depth(dir / "d.exr");
+      FAIL() << "expected InputError for depth " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("d.exr"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("pixel (2, 1)"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(ImageTest, SameImageSameBytes) {
   TempDir dir;
   Image img(5, 4, 3, ColorSpace::kLinear, 0.25f);
