@@ -10,7 +10,7 @@ namespace {
 
 struct TrainArgs {
   recon::TrainRunOptions run;
-  std::string images = "images", masks = "none";
+  std::string images = "images", masks = "none", random_init = "photo";
   std::vector<double> background;
   CLI::App* app = nullptr;
 };
@@ -19,6 +19,8 @@ int run_train(TrainArgs& args) {
   recon::TrainRunOptions o = args.run;
   o.inputs.images = recon::parse_train_images(args.images, "--images");
   o.inputs.masks = recon::parse_train_masks(args.masks, "--masks");
+  o.train.random_init = args.random_init == "frustum" ? recon::TrainOptions::RandomInit::kFrustum
+                                                      : recon::TrainOptions::RandomInit::kPhotoConsistent;
   if (o.resume) {
     // Start from what the run was trained with; explicitly given flags must agree (checked below
     // through the checkpoint) or extend nothing silently.
@@ -33,6 +35,7 @@ int run_train(TrainArgs& args) {
     if (!given("--seed")) o.train.seed = stored.train.seed;
     if (!given("--background")) o.train.background = stored.train.background;
     if (!given("--random-init-count")) o.train.random_init_count = stored.train.random_init_count;
+    if (!given("--random-init")) o.train.random_init = stored.train.random_init;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
@@ -82,6 +85,10 @@ Command make_train(CLI::App& root) {
   sub->add_option("--seed", o.train.seed, "Random seed (view order, splits, random init)")->capture_default_str();
   sub->add_option("--background", args->background, "Background colour R G B in [0, 1] (default 0 0 0)")
       ->expected(3);
+  sub->add_option("--random-init", args->random_init,
+                  "Random initialization when the dataset has no COLMAP points: photo (each point at the depth "
+                  "where neighbouring views agree) or frustum (uniform in inverse depth, random colours)")
+      ->capture_default_str()->check(CLI::IsMember({"photo", "frustum"}));
   sub->add_option("--random-init-count", o.train.random_init_count,
                   "Gaussians for random initialization when the dataset has no COLMAP points")
       ->capture_default_str();

@@ -1,5 +1,7 @@
 #include "reconstruction/run.h"
 
+#include "reconstruction/init_random.h"
+
 #include <chrono>
 #include <filesystem>
 #include <limits>
@@ -9,6 +11,7 @@
 #include "core/error.h"
 #include "core/image.h"
 #include "core/progress.h"
+#include "reconstruction/init_random.h"
 
 namespace weathergs::recon {
 
@@ -219,7 +222,8 @@ std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInput
   return views;
 }
 
-GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options, std::string* source) {
+GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options,
+                                     const std::vector<TrainView>& train_views, std::string* source) {
   const std::string path = (fs::path(dataset.file(layout::kSparseModelDir)) / "points3D.txt").string();
   if (fs::exists(path)) {
     const std::vector<ColmapPoint3D> pts = read_colmap_points3d(path);
@@ -233,11 +237,8 @@ GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions&
       return init_from_points(xyz, rgb);
     }
   }
-  std::vector<Camera> train_cams;
-  for (const std::string& v : dataset.split("train")) train_cams.push_back(dataset.camera(v));
   *source = "random:" + std::to_string(options.random_init_count);
-  return init_random(train_cams, options.random_init_count, options.seed, options.random_init_near_m,
-                     options.random_init_far_m);
+  return init_random(train_views, options);
 }
 
 TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_iteration) {
@@ -260,7 +261,7 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
   fs::create_directories(run);
 
   std::string init;
-  GaussianSet<float> initial = initial_gaussians(dataset, o.train, &init);
+  GaussianSet<float> initial = initial_gaussians(dataset, o.train, views, &init);
   Trainer trainer(std::move(views), std::move(initial), o.train, extent);
   double seconds_before = 0;
   if (o.resume) {

@@ -60,7 +60,8 @@ struct TrainRunOptions {
 std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInputs& inputs);
 
 // Initial Gaussians: COLMAP points3D.txt of the dataset when present and non-empty, else random.
-GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options, std::string* source);
+GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options,
+                                     const std::vector<TrainView>& train_views, std::string* source);
 
 struct TrainRunResult {
   int iterations = 0;

@@ -21,7 +21,6 @@ constexpr int64_t kChunk = 4096;
 // Rng streams of the trainer (the seed is the user's; streams separate the uses).
 constexpr uint64_t kStreamViews = 0x7669657773ull;     // epoch permutations
 constexpr uint64_t kStreamSplit = 0x73706c6974ull;     // split samples, combined with the iteration
-constexpr uint64_t kStreamRandomInit = 0x696e6974ull;  // random initialization
 
 template <typename F>
 void for_each_array(GaussianSet<float>& g, F f) {
@@ -106,9 +105,14 @@ Json TrainOptions::to_json() const {
               {"max_screen_size_px", max_screen_size_px},
               {"max_world_size", max_world_size},
               {"background", {background[0], background[1], background[2]}},
+              {"random_init", to_string(random_init)},
               {"random_init_count", random_init_count},
               {"random_init_near_m", random_init_near_m},
               {"random_init_far_m", random_init_far_m}};
+}
+
+const char* to_string(TrainOptions::RandomInit r) {
+  return r == TrainOptions::RandomInit::kFrustum ? "frustum" : "photo";
 }
 
 const char* to_string(TrainOptions::Schedule s) {
@@ -165,6 +169,8 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
     if (!b.is_array() || b.size() != 3) throw InputError(b.where(), "expected an array of 3 numbers");
     for (int c = 0; c < 3; ++c) o.background[c] = b.at(c).as<double>();
   }
+  o.random_init = r.get_enum_or("random_init", o.random_init,
+                                 {RandomInit::kFrustum, RandomInit::kPhotoConsistent});
   o.random_init_count = r.get_or("random_init_count", o.random_init_count);
   o.random_init_near_m = r.get_or("random_init_near_m", o.random_init_near_m);
   o.random_init_far_m = r.get_or("random_init_far_m", o.random_init_far_m);
@@ -185,26 +191,6 @@ double scene_extent(const std::vector<Camera>& cameras) {
   for (const Camera& c : cameras) max_dist = std::max(max_dist, (c.center_world() - mean).norm());
   // One camera (or coincident ones) has no spread: fall back to 1 m so learning rates stay sane.
   return max_dist > 0 ? max_dist * 1.1 : 1.0;
-}
-
-GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed, double near_m,
-                               double far_m) {
-  WGS_CHECK(!cameras.empty());
-  WGS_CHECK_GT(count, 0);
-  WGS_CHECK(near_m > 0 && far_m > near_m);
-  // Uniform over the train cameras' view frusta between near_m and far_m, uniform in inverse depth
-  // (as much volume per pixel close by as far away): works for orbits and forward-facing rigs alike,
-  // where a box around the camera centres would miss a scene in front of a sliding rig.
-  std::vector<Eigen::Vector3d> pts(count), cols(count);
-  for (int i = 0; i < count; ++i) {
-    Rng rng(seed, kStreamRandomInit, uint64_t(i));
-    const Camera& cam = cameras[rng.uniform_int(uint32_t(cameras.size()))];
-    const Eigen::Vector2d uv(cam.width * rng.uniform_double(), cam.height * rng.uniform_double());
-    const double inv = 1.0 / far_m + (1.0 / near_m - 1.0 / far_m) * rng.uniform_double();
-    pts[i] = cam.unproject(uv, 1.0 / inv);
-    for (int k = 0; k < 3; ++k) cols[i][k] = rng.uniform_double();
-  }
-  return init_from_points(pts, cols);
 }
 
 double peak_rss_mb() {

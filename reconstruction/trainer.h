@@ -51,6 +51,10 @@ struct TrainOptions {
   // Only fields still at their reference value are scaled; a value set by hand is kept.
   enum class Schedule { kReference, kScaled };
   Schedule schedule = Schedule::kScaled;
+  // Without COLMAP points (reconstruction/init_random.h): kPhotoConsistent places each random ray's
+  // point where neighbouring train views agree in colour; kFrustum is the plain random cloud.
+  enum class RandomInit { kFrustum, kPhotoConsistent };
+  RandomInit random_init = RandomInit::kPhotoConsistent;
   int random_init_count = 50000;      // Gaussians when the dataset has no COLMAP points
   double random_init_near_m = 0.5;    // depth range (m) of the random initialization
   double random_init_far_m = 20.0;
@@ -62,6 +66,7 @@ struct TrainOptions {
   TrainOptions effective() const;
 };
 const char* to_string(TrainOptions::Schedule s);
+const char* to_string(TrainOptions::RandomInit r);
 
 // One training image: camera, sRGB pixels in [0, 1] (H x W x 3) and an optional mask (H x W,
 // nonzero = masked out; empty = all valid).
@@ -73,11 +78,6 @@ struct TrainView {
 
 // Radius of the camera centres around their mean, times 1.1 (getNerfppNorm): the "cameras extent".
 double scene_extent(const std::vector<Camera>& cameras);
-
-// Random initialization inside the cameras' view frusta between near_m and far_m, uniform in inverse
-// depth, random colours (see docs/reconstruction.md).
-GaussianSet<float> init_random(const std::vector<Camera>& cameras, int count, uint64_t seed, double near_m,
-                               double far_m);
 
 // Thrown when a loss or gradient stops being finite; names the parameter, the Gaussian and the step.
 class TrainingDiverged : public NumericalDivergence {

@@ -6,6 +6,7 @@
 #include "core/parallel.h"
 #include "core/atomic_file.h"
 #include "tests/core/test_util.h"
+#include "reconstruction/init_random.h"
 #include "reconstruction/trainer.h"
 #include "tests/reconstruction/test_scene.h"
 
@@ -271,7 +272,13 @@ TEST(InitTest, RandomInitFillsTheViewFrustaAndExtentFollowsTheReference) {
   const std::vector<Camera> cams = ring_cameras(8, 32, 24, 30, 4.0);
   // Centres on a circle of radius 4 at one height: extent = 1.1 x 4.
   EXPECT_NEAR(scene_extent(cams), 4.4, 1e-9);
-  const GaussianSet<float> g = init_random(cams, 500, 3, 0.5, 20.0);
+  std::vector<TrainView> views(cams.size());
+  for (size_t i = 0; i < cams.size(); ++i) views[i].camera = cams[i];
+  TrainOptions o;
+  o.random_init = TrainOptions::RandomInit::kFrustum;
+  o.random_init_count = 500;
+  o.seed = 3;
+  const GaussianSet<float> g = init_random(views, o);
   ASSERT_EQ(g.size(), 500u);
   int near_half = 0;
   for (size_t i = 0; i < g.size(); ++i) {
@@ -289,7 +296,7 @@ TEST(InitTest, RandomInitFillsTheViewFrustaAndExtentFollowsTheReference) {
     for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(g.log_scale[i * 3 + c]));
   }
   EXPECT_EQ(near_half, 500);
-  EXPECT_EQ(init_random(cams, 500, 3, 0.5, 20.0).position, g.position);  // same seed, same cloud
+  EXPECT_EQ(init_random(views, o).position, g.position);  // same seed, same cloud
 }
 
 TEST(TrainerTest, OptionsAreValidated) {
