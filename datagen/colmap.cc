@@ -13,6 +13,8 @@
 
 #include "core/atomic_file.h"
 #include "core/colmap_model.h"
+#include "core/dataset.h"
+#include "core/dataset_layout.h"
 #include "core/error.h"
 #include "datagen/process.h"
 
@@ -283,6 +285,42 @@ MapperResult map_unknown_poses(const std::string& image_dir, const std::string& 
   for (auto& [n, c] : by_name) result.cameras.push_back(c);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
+}
+
+const char* to_string(TriangulateImages i) { return i == TriangulateImages::kClean ? "clean" : "images"; }
+const char* to_string(TriangulateViews v) { return v == TriangulateViews::kTrain ? "train" : "all"; }
+
+TriangulationResult triangulate_dataset(const std::string& dataset_dir, const TriangulateOptions& o,
+                                        std::string* model_dir_out) {
+  o.colmap.validate();
+  const Dataset ds = read_dataset(dataset_dir);
+  const bool clean = o.images == TriangulateImages::kClean;
+  const std::string image_dir = ds.dir(clean ? ImageKind::kClean : ImageKind::kImages);
+  if (!fs::is_directory(image_dir))
+    throw InputError(image_dir, std::string("missing: the dataset has no ") + (clean ? "clean" : "input") + " images");
+  std::vector<Camera> cameras;
+  if (o.views == TriangulateViews::kAll) {
+    cameras = ds.cameras;
+  } else {
+    for (const std::string& v : ds.split("train")) cameras.push_back(ds.camera(v));
+  }
+  if (cameras.size() < 2)
+    throw InputError(dataset_dir, "triangulation needs at least 2 views, the dataset's " +
+                                      std::string(to_string(o.views)) + " views are " + std::to_string(cameras.size()));
+  for (const Camera& c : cameras) {
+    const std::string img = (fs::path(image_dir) / image_name(c)).string();
+    if (!fs::exists(img)) throw InputError(img, "missing: view " + c.name + " has no image");
+  }
+  const std::string model = ds.file(clean ? layout::kSparseCleanModelDir : layout::kSparseModelDir);
+  if (fs::exists(model) && !o.force)
+    throw InputError(model, "already holds a model: pass --force to replace it");
+  const std::string logs = ds.file(std::string(layout::kLogsDir) + (clean ? "/colmap_clean" : "/colmap"));
+  fs::create_directories(fs::path(model).parent_path());
+  AtomicDirectory out(model);
+  TriangulationResult r = triangulate_known_poses(cameras, image_dir, logs, out.path(), o.colmap);
+  out.commit();
+  if (model_dir_out) *model_dir_out = model;
+  return r;
 }
 
 }  // namespace weathergs::datagen

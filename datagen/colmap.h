@@ -39,6 +39,25 @@ TriangulationResult triangulate_known_poses(const std::vector<Camera>& cameras, 
                                             const std::string& work_dir, const std::string& model_dir,
                                             const ColmapOptions& options);
 
+// `weathergs triangulate`: known-pose triangulation of an existing dataset (any dataset with a shared
+// PINHOLE camera, e.g. one a user weathered with `weathergs weather`), as `generate` does it.
+enum class TriangulateImages { kImages, kClean };  // images/ -> sparse/0, clean/ -> sparse_clean/0
+enum class TriangulateViews { kAll, kTrain };      // all views (as generate) or the train split only
+const char* to_string(TriangulateImages i);
+const char* to_string(TriangulateViews v);
+
+struct TriangulateOptions {
+  TriangulateImages images = TriangulateImages::kImages;
+  TriangulateViews views = TriangulateViews::kAll;
+  bool force = false;  // replace an existing model
+  ColmapOptions colmap;
+};
+
+// Writes the model atomically (nothing on failure) and COLMAP's logs to logs/colmap[_clean]/.
+// InputError: no dataset, no clean/ for kClean, an existing model without force, no matches.
+TriangulationResult triangulate_dataset(const std::string& dataset_dir, const TriangulateOptions& options,
+                                        std::string* model_dir = nullptr);
+
 struct MapperResult {
   ModelStats stats;
   std::vector<Camera> cameras;     // registered views, named by file stem, in name order

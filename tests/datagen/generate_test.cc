@@ -152,6 +152,27 @@ TEST(GenerateTest, TinyRainVariantEndToEnd) {
   EXPECT_EQ(read_file(ds.path(ImageKind::kClean, "001")), read_file(ds2.path(ImageKind::kClean, "001")));
   EXPECT_NE(read_file(ds.path(ImageKind::kImages, "001")), read_file(ds2.path(ImageKind::kImages, "001")));
 
+  // `weathergs triangulate` on a dataset without SfM points (as a user's own weathered dataset):
+  // the train views' clean images -> sparse_clean/0; an existing model needs --force.
+  const std::string bare = tmp / "bare";
+  copy_tree(out, bare);
+  fs::remove_all(bare + "/sparse");
+  fs::remove_all(bare + "/sparse_clean");
+  auto triangulate = [&](const std::string& args) {
+    const std::string c = std::string(WEATHERGS_BINARY) + " --quiet triangulate --data " + bare + " " + args + " > " +
+                          (tmp / "tri.log") + " 2>&1";
+    return WEXITSTATUS(std::system(c.c_str()));
+  };
+  ASSERT_EQ(triangulate("--images clean --views train"), 0) << read_file(tmp / "tri.log");
+  EXPECT_NE(read_file(tmp / "tri.log").find("sparse_clean/0"), std::string::npos) << read_file(tmp / "tri.log");
+  const ColmapModel tri = read_colmap_text(bare + "/sparse_clean/0");
+  EXPECT_GE(tri.points.size(), 20u);
+  EXPECT_EQ(tri.images.size(), 4u);  // the train views only
+  EXPECT_FALSE(fs::exists(bare + "/sparse/0"));
+  EXPECT_EQ(triangulate("--images clean"), 2);
+  EXPECT_NE(read_file(tmp / "tri.log").find("--force"), std::string::npos) << read_file(tmp / "tri.log");
+  EXPECT_EQ(read_colmap_text(bare + "/sparse_clean/0").points.size(), tri.points.size());  // untouched
+
   // Bad input through the CLI: exit code 2, nothing written.
   const std::string bad = std::string(WEATHERGS_BINARY) + " --quiet generate --scene " + scene_path("pool.json") +
                           " --weather hail --profile tiny --cache " + o.cache_dir + " --out " + (tmp / "bad") +
