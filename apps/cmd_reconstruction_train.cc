@@ -31,6 +31,7 @@ int run_train(TrainArgs& args) {
     if (!given("--images-dir")) o.inputs.images_dir = stored.inputs.images_dir;
     if (!given("--masks")) o.inputs.masks = stored.inputs.masks;
     if (!given("--masks-dir")) o.inputs.masks_dir = stored.inputs.masks_dir;
+    if (!given("--points-dir")) o.inputs.points_dir = stored.inputs.points_dir;
     if (!given("--iterations")) o.train.iterations = stored.train.iterations;
     if (!given("--seed")) o.train.seed = stored.train.seed;
     if (!given("--background")) o.train.background = stored.train.background;
@@ -80,6 +81,8 @@ Command make_train(CLI::App& root) {
                   "all (either)")
       ->capture_default_str()->check(CLI::IsMember({"none", "lens", "particles", "all"}));
   sub->add_option("--masks-dir", o.inputs.masks_dir, "Loss masks from <DIR>/<view>.png instead (255 = ignore)");
+  sub->add_option("--points-dir", o.inputs.points_dir,
+                  "Initialize from this COLMAP text model (e.g. DATASET/sparse_clean/0) instead of sparse/0");
   sub->add_option("--iterations", o.train.iterations, "Training iterations")->capture_default_str()
       ->check(CLI::PositiveNumber);
   sub->add_option("--seed", o.train.seed, "Random seed (view order, splits, random init)")->capture_default_str();

@@ -311,10 +311,12 @@ TriangulationResult triangulate_dataset(const std::string& dataset_dir, const Tr
     const std::string img = (fs::path(image_dir) / image_name(c)).string();
     if (!fs::exists(img)) throw InputError(img, "missing: view " + c.name + " has no image");
   }
-  const std::string model = ds.file(clean ? layout::kSparseCleanModelDir : layout::kSparseModelDir);
+  const std::string model =
+      !o.model_dir.empty() ? o.model_dir : ds.file(clean ? layout::kSparseCleanModelDir : layout::kSparseModelDir);
   if (fs::exists(model) && !o.force)
     throw InputError(model, "already holds a model: pass --force to replace it");
-  const std::string logs = ds.file(std::string(layout::kLogsDir) + (clean ? "/colmap_clean" : "/colmap"));
+  const std::string logs = !o.logs_dir.empty() ? o.logs_dir
+                                               : ds.file(std::string(layout::kLogsDir) + (clean ? "/colmap_clean" : "/colmap"));
   fs::create_directories(fs::path(model).parent_path());
   AtomicDirectory out(model);
   TriangulationResult r = triangulate_known_poses(cameras, image_dir, logs, out.path(), o.colmap);

@@ -51,6 +51,9 @@ struct TriangulateOptions {
   TriangulateViews views = TriangulateViews::kAll;
   bool force = false;  // replace an existing model
   ColmapOptions colmap;
+  // Non-empty: write the model (and COLMAP's logs) here instead of into the dataset, which then stays
+  // untouched (what `weathergs reconstruct` does for a dataset without points).
+  std::string model_dir, logs_dir;
 };
 
 // Writes the model atomically (nothing on failure) and COLMAP's logs to logs/colmap[_clean]/.

@@ -42,6 +42,7 @@ Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool c
               {"images_dir", optional_path(o.inputs.images_dir)},
               {"masks", to_string(o.inputs.masks)},
               {"masks_dir", optional_path(o.inputs.masks_dir)},
+              {"points_dir", optional_path(o.inputs.points_dir.empty() ? "" : fs::absolute(o.inputs.points_dir).lexically_normal().string())},
               {"initialization", init},
               {"iterations", t.iteration()},
               {"sh_degree", t.sh_degree()},
@@ -78,6 +79,7 @@ RunInfo read_run_json(const std::string& run_dir) {
   info.inputs.images_dir = r.get_optional<std::string>("images_dir").value_or("");
   info.inputs.masks = parse_train_masks(r.get<std::string>("masks"), r.where("masks"));
   info.inputs.masks_dir = r.get_optional<std::string>("masks_dir").value_or("");
+  info.inputs.points_dir = r.get_optional<std::string>("points_dir").value_or("");
   r.get<std::string>("initialization");
   info.iterations = r.get<int>("iterations");
   info.sh_degree = r.get<int>("sh_degree");
@@ -127,6 +129,7 @@ void TrainInputs::validate(const std::string& where) const {
 std::string TrainInputs::to_string() const {
   std::string s = images_dir.empty() ? std::string("images ") + recon::to_string(images) : "images_dir " + images_dir;
   s += masks_dir.empty() ? std::string(", masks ") + recon::to_string(masks) : ", masks_dir " + masks_dir;
+  if (!points_dir.empty()) s += ", points_dir " + points_dir;
   return s;
 }
 
@@ -222,9 +225,12 @@ std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInput
   return views;
 }
 
-GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options,
+GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& inputs, const TrainOptions& options,
                                      const std::vector<TrainView>& train_views, std::string* source) {
-  const std::string path = (fs::path(dataset.file(layout::kSparseModelDir)) / "points3D.txt").string();
+  const bool given = !inputs.points_dir.empty();
+  const std::string path =
+      (fs::path(given ? inputs.points_dir : dataset.file(layout::kSparseModelDir)) / "points3D.txt").string();
+  if (given && !fs::exists(path)) throw InputError(path, "missing: points_dir must hold a COLMAP text model");
   if (fs::exists(path)) {
     const std::vector<ColmapPoint3D> pts = read_colmap_points3d(path);
     if (!pts.empty()) {
@@ -261,12 +267,14 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
   fs::create_directories(run);
 
   std::string init;
-  GaussianSet<float> initial = initial_gaussians(dataset, o.train, views, &init);
+  GaussianSet<float> initial = initial_gaussians(dataset, o.inputs, o.train, views, &init);
   Trainer trainer(std::move(views), std::move(initial), o.train, extent);
   double seconds_before = 0;
   if (o.resume) {
     const RunInfo ri = read_run_json(o.out);
-    if (!(ri.inputs == o.inputs) || fs::path(ri.dataset) != fs::absolute(o.dataset).lexically_normal())
+    TrainInputs given = o.inputs;
+    if (!given.points_dir.empty()) given.points_dir = fs::absolute(given.points_dir).lexically_normal().string();
+    if (!(ri.inputs == given) || fs::path(ri.dataset) != fs::absolute(o.dataset).lexically_normal())
       throw InputError(info, "the run was trained on dataset " + ri.dataset + " with " + ri.inputs.to_string() +
                                  ": resume with the same inputs");
     seconds_before = trainer.load_checkpoint(ckpt);

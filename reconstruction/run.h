@@ -3,7 +3,8 @@
 // A run folder holds:
 //   run.json          {"format": "weathergs-3dgs-run", "version": 2, "complete": bool, "dataset": ...,
 //                      "images": "images"|"clean", "images_dir": path|null, "masks": "none"|"lens"|
-//                      "particles"|"all", "masks_dir": path|null, "iterations": done, "sh_degree": ...,
+//                      "particles"|"all", "masks_dir": path|null, "points_dir": path|null (optional),
+//                      "iterations": done, "sh_degree": ...,
 //                      "num_gaussians": ..., "train_seconds": ..., "peak_rss_mb": ..., "options": {...}}
 //   point_cloud.ply   the standard 3DGS PLY (written at every checkpoint and at the end)
 //   checkpoint.bin    parameters + Adam state for --resume
@@ -35,10 +36,14 @@ struct TrainInputs {
   std::string images_dir;               // non-empty: <images_dir>/<view>.png instead of `images`
   TrainMasks masks = TrainMasks::kNone;
   std::string masks_dir;                // non-empty: <masks_dir>/<view>.png (255 = masked out)
+  // Non-empty: the COLMAP text model (points3D.txt) to initialize from instead of the dataset's
+  // sparse/0, e.g. sparse_clean/0 for the oracle.
+  std::string points_dir;
 
   void validate(const std::string& where) const;  // InputError naming the field and the rule
   bool operator==(const TrainInputs& o) const {
-    return images == o.images && images_dir == o.images_dir && masks == o.masks && masks_dir == o.masks_dir;
+    return images == o.images && images_dir == o.images_dir && masks == o.masks && masks_dir == o.masks_dir &&
+           points_dir == o.points_dir;
   }
   std::string to_string() const;
 };
@@ -59,8 +64,9 @@ struct TrainRunOptions {
 // Loads the dataset's train-split views with the chosen images and masks. InputError names the file.
 std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInputs& inputs);
 
-// Initial Gaussians: COLMAP points3D.txt of the dataset when present and non-empty, else random.
-GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainOptions& options,
+// Initial Gaussians: COLMAP points3D.txt of inputs.points_dir (which must hold one) or else of the
+// dataset's sparse/0 when present and non-empty, else random (init_random.h).
+GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& inputs, const TrainOptions& options,
                                      const std::vector<TrainView>& train_views, std::string* source);
 
 struct TrainRunResult {

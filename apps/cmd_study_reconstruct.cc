@@ -1,0 +1,78 @@
+// `weathergs reconstruct`: one method on one dataset, end to end (study/reconstruct.h, docs/study.md).
+#include <cstdio>
+#include <memory>
+
+#include "apps/command.h"
+#include "apps/evaluator_flags.h"
+#include "core/progress.h"
+#include "study/reconstruct.h"
+
+namespace weathergs::cli {
+namespace {
+
+struct ReconstructArgs {
+  study::ReconstructOptions options;
+  std::string method = "3dgs";
+  bool no_triangulate = false;
+  ScoringFlags scoring;
+};
+
+int run(ReconstructArgs& a) {
+  study::ReconstructOptions o = a.options;
+  o.method = study::parse_method(a.method, "--method");
+  o.points = a.no_triangulate ? study::PointsPolicy::kDataset : study::PointsPolicy::kAuto;
+  o.scoring = a.scoring.options();
+  ProgressBar bar("train", o.iterations);
+  int reported = 0;
+  auto on_iteration = [&](const recon::IterationStats& st) {
+    if (reported++ == 0) bar.tick(st.iteration - 1);  // a resumed run starts part way
+    if (st.iteration % 10 == 0 || st.iteration == o.iterations) {
+      char s[120];
+      std::snprintf(s, sizeof s, "it %d loss %.4f n %lld", st.iteration, st.loss, static_cast<long long>(st.num_gaussians));
+      bar.set_status(s);
+    }
+    bar.tick();
+  };
+  auto on_stage = [&](const std::string& s) {
+    if (!is_quiet()) std::fprintf(stderr, "reconstruct: %s\n", s.c_str());
+  };
+  const study::ReconstructResult r = study::reconstruct(o, on_iteration, on_stage);
+  bar.finish();
+  const evaluator::Results& res = r.results;
+  std::printf("%s on %s (%zu test views): PSNR %s  SSIM %s  LPIPS %s | train %.1f s, render %.1f ms/view, "
+              "peak %.0f MiB | init: %s\nwrote %s/results.json\n",
+              res.method.c_str(), res.dataset.c_str(), res.per_view.size(),
+              evaluator::format_metric(res.metrics.psnr, 2).c_str(), evaluator::format_metric(res.metrics.ssim, 4).c_str(),
+              res.metrics.lpips ? evaluator::format_metric(*res.metrics.lpips, 4).c_str() : "skipped", r.train_seconds,
+              1000 * r.render_seconds_per_view, r.peak_rss_mb, r.initialization.c_str(), o.out.c_str());
+  return kExitOk;
+}
+
+Command make(CLI::App& root) {
+  auto a = std::make_shared<ReconstructArgs>();
+  std::string methods;
+  for (study::Method m : study::all_methods())
+    methods += std::string(methods.empty() ? "" : ", ") + study::to_string(m) + " (" + study::method_description(m) + ")";
+  CLI::App* sub = root.add_subcommand(
+      "reconstruct",
+      "Run one method on one dataset end to end: SfM points if missing, training, test renders, evaluation "
+      "(RUN/results.json). A stopped run resumes when started again.");
+  sub->add_option("--data", a->options.dataset, "Dataset folder")->required();
+  sub->add_option("--method", a->method, "Method: " + methods)->capture_default_str();
+  sub->add_option("--out", a->options.out, "Run folder")->required();
+  sub->add_option("--iterations", a->options.iterations, "Training iterations")->capture_default_str();
+  sub->add_option("--seed", a->options.seed, "Random seed")->capture_default_str();
+  sub->add_option("--checkpoint-every", a->options.checkpoint_every, "Iterations between checkpoints (0 = only at the end)")
+      ->capture_default_str();
+  sub->add_flag("--force", a->options.force, "Redo a complete run");
+  sub->add_flag("--no-triangulate", a->no_triangulate,
+                "Never run COLMAP: without SfM points in the dataset, use the random initialization");
+  sub->add_option("--colmap", a->options.colmap.executable, "COLMAP executable")->capture_default_str();
+  a->scoring.add_to(sub);
+  return {sub, [a] { return run(*a); }};
+}
+
+}  // namespace
+}  // namespace weathergs::cli
+
+WGS_REGISTER_COMMAND(reconstruct, weathergs::cli::make)

@@ -1,0 +1,51 @@
+#include "study/method.h"
+
+#include "core/error.h"
+
+namespace weathergs::study {
+
+const char* to_string(Method m) {
+  switch (m) {
+    case Method::k3dgs: return "3dgs";
+    case Method::kOracle: return "oracle";
+    case Method::kGtMasks: return "gt-masks";
+  }
+  WGS_CHECK(false);
+  return "";
+}
+
+std::vector<Method> all_methods() { return {Method::k3dgs, Method::kOracle, Method::kGtMasks}; }
+
+Method parse_method(const std::string& name, const std::string& where) {
+  std::string known;
+  for (Method m : all_methods()) {
+    if (name == to_string(m)) return m;
+    known += (known.empty() ? "" : ", ") + std::string(to_string(m));
+  }
+  throw InputError(where, "unknown method \"" + name + "\" (known: " + known + ")");
+}
+
+std::string method_description(Method m) {
+  switch (m) {
+    case Method::k3dgs: return "vanilla 3DGS on the weathered images";
+    case Method::kOracle: return "3DGS on the clean images and their SfM points (upper bound)";
+    case Method::kGtMasks: return "3DGS on the weathered images, ground-truth particle and lens masks excluded from the loss";
+  }
+  WGS_CHECK(false);
+  return "";
+}
+
+Recipe recipe(Method m) {
+  Recipe r;
+  switch (m) {
+    case Method::k3dgs: break;
+    case Method::kOracle:
+      r.images = recon::TrainImages::kClean;
+      r.clean_points = true;
+      break;
+    case Method::kGtMasks: r.masks = recon::TrainMasks::kAll; break;
+  }
+  return r;
+}
+
+}  // namespace weathergs::study

@@ -1,0 +1,145 @@
+#include "study/reconstruct.h"
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/dataset.h"
+#include "core/dataset_layout.h"
+#include "core/error.h"
+#include "core/json_reader.h"
+
+namespace weathergs::study {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kModelDir = "model";
+constexpr const char* kRendersDir = "renders/test";
+constexpr const char* kResultsFile = "results.json";
+
+bool has_points(const std::string& model_dir) {
+  const fs::path p = fs::path(model_dir) / "points3D.txt";
+  if (!fs::exists(p)) return false;
+  // A points3D.txt with only comments holds no points (COLMAP writes that for an empty model).
+  std::ifstream in(p);
+  std::string line;
+  while (std::getline(in, line))
+    if (!line.empty() && line[0] != '#') return true;
+  return false;
+}
+
+}  // namespace
+
+void ReconstructOptions::validate() const {
+  if (dataset.empty()) throw InputError("reconstruct options", "dataset is empty: the dataset folder is required");
+  if (out.empty()) throw InputError("reconstruct options", "out is empty: the run folder is required");
+  if (iterations < 1) throw InputError("reconstruct options", "iterations " + std::to_string(iterations) + " must be >= 1");
+  if (checkpoint_every < 0) throw InputError("reconstruct options", "checkpoint_every must be >= 0");
+  colmap.validate();
+}
+
+ReconstructResult reconstruct(const ReconstructOptions& o, const recon::IterationCallback& on_iteration,
+                              const StageCallback& on_stage) {
+  o.validate();
+  auto stage = [&](const std::string& s) {
+    if (on_stage) on_stage(s);
+  };
+  const Dataset ds = read_dataset(o.dataset);
+  const fs::path run(o.out);
+  const fs::path results_path = run / kResultsFile;
+  if (fs::exists(results_path)) {
+    if (!o.force) throw InputError(o.out, "already holds a complete run (results.json): pass --force to redo it");
+    fs::remove_all(run);
+  }
+  fs::create_directories(run);
+  const Recipe r = recipe(o.method);
+  ReconstructResult out;
+
+  // 1. SfM points: the dataset's, else triangulated into the run folder.
+  const std::string dataset_points = ds.file(r.clean_points ? layout::kSparseCleanModelDir : layout::kSparseModelDir);
+  std::string points_dir;
+  if (has_points(dataset_points)) {
+    points_dir = dataset_points;
+    out.initialization = "dataset " + fs::relative(dataset_points, ds.root).string();
+  } else if (o.points == PointsPolicy::kAuto) {
+    const fs::path local = run / (r.clean_points ? layout::kSparseCleanModelDir : layout::kSparseModelDir);
+    if (has_points(local.string())) {
+      points_dir = local.string();
+      out.initialization = "triangulated (earlier run)";
+    } else {
+      stage("triangulating (COLMAP, known poses): the dataset has no SfM points");
+      datagen::TriangulateOptions t;
+      t.images = r.clean_points ? datagen::TriangulateImages::kClean : datagen::TriangulateImages::kImages;
+      t.views = datagen::TriangulateViews::kAll;
+      t.colmap = o.colmap;
+      t.force = true;
+      t.model_dir = local.string();
+      t.logs_dir = (run / layout::kLogsDir / "colmap").string();
+      fs::create_directories(local.parent_path());
+      try {
+        const datagen::TriangulationResult tr = datagen::triangulate_dataset(o.dataset, t);
+        if (has_points(local.string())) {
+          points_dir = local.string();
+          out.initialization = "triangulated: " + std::to_string(tr.stats.points) + " points";
+        }
+      } catch (const InputError& e) {
+        stage(std::string("warning: triangulation failed, using the random initialization: ") + e.what());
+      }
+      if (points_dir.empty()) out.initialization = "random (COLMAP found no points)";
+    }
+  }
+  if (out.initialization.empty()) out.initialization = "random (the dataset has no SfM points)";
+
+  // 2. Training (resumed when an earlier run of the same options stopped part way).
+  recon::TrainRunOptions t;
+  t.dataset = o.dataset;
+  t.inputs.images = r.images;
+  t.inputs.masks = r.masks;
+  t.inputs.points_dir = points_dir;
+  t.out = (run / kModelDir).string();
+  t.checkpoint_every = o.checkpoint_every;
+  t.train.iterations = o.iterations;
+  t.train.seed = o.seed;
+  const fs::path run_json = run / kModelDir / "run.json";
+  bool trained = false;
+  if (fs::exists(run_json)) {
+    const Json j = read_json_file(run_json.string());
+    trained = j.value("complete", false) && j.value("iterations", 0) == o.iterations;
+    t.resume = !trained && fs::exists(run / kModelDir / "checkpoint.bin");
+    t.force = !trained && !t.resume;
+  }
+  if (!trained) {
+    stage(std::string(t.resume ? "resuming" : "training") + " " + to_string(o.method) + ": " + method_description(o.method));
+    const recon::TrainRunResult tr = recon::train_run(t, on_iteration);
+    out.resumed = t.resume;
+    out.peak_rss_mb = tr.peak_rss_mb;
+  }
+
+  // 3. Test renders, then 4. the evaluation; results.json last.
+  stage("rendering the test views");
+  recon::RenderRunOptions rr;
+  rr.model = t.out;
+  rr.dataset = o.dataset;
+  rr.split = "test";
+  rr.method = to_string(o.method);
+  rr.out = (run / kRendersDir).string();
+  fs::create_directories(fs::path(rr.out).parent_path());
+  const recon::RenderRunResult rres = recon::render_run(rr);
+  stage("evaluating against the clean ground truth");
+  evaluator::EvaluateOptions e;
+  e.gt_dataset = o.dataset;
+  e.renders_dir = rr.out;
+  e.method = to_string(o.method);
+  e.scoring = o.scoring;
+  out.results = evaluator::evaluate(e);
+  out.results.method_info["initialization"] = out.initialization;
+  out.results.method_info["method_description"] = method_description(o.method);
+  evaluator::write_results(results_path.string(), out.results);
+  out.train_seconds = out.results.method_info.value("train_seconds", 0.0);
+  out.peak_rss_mb = out.results.method_info.value("peak_rss_mb", out.peak_rss_mb);
+  out.render_seconds_per_view = rres.views > 0 ? rres.render_seconds / rres.views : 0;
+  return out;
+}
+
+}  // namespace weathergs::study

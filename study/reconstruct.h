@@ -1,0 +1,56 @@
+// One method on one dataset, end to end (`weathergs reconstruct`): SfM points when the dataset has
+// none, training, test renders, evaluation against the clean ground truth.
+//
+// The run folder:
+//   sparse/0/           COLMAP points triangulated here when the dataset has none (the dataset itself
+//                       is never modified); logs/colmap/ its logs
+//   model/              the training run (reconstruction/run.h: run.json, point_cloud.ply, checkpoint)
+//   renders/test/       <view>.png and info.json (method, train/render seconds, peak memory, ...)
+//   results.json        evaluator/results.h, written last: its presence means the run is complete
+// A run interrupted during training resumes from its checkpoint when started again with the same
+// options (same model, byte for byte); a complete run is refused unless `force` (then redone).
+#pragma once
+
+#include <string>
+
+#include "datagen/colmap.h"
+#include "evaluator/evaluate.h"
+#include "reconstruction/run.h"
+#include "study/method.h"
+
+namespace weathergs::study {
+
+enum class PointsPolicy {
+  kAuto,    // the dataset's points, else triangulate into the run folder, else (COLMAP finds nothing
+            // or is missing) the trainer's photo-consistent random initialization, with a warning
+  kDataset  // the dataset's points, else random initialization: never runs COLMAP
+};
+
+struct ReconstructOptions {
+  std::string dataset;
+  std::string out;
+  Method method = Method::k3dgs;
+  int iterations = 30000;
+  uint64_t seed = 0;
+  int checkpoint_every = 1000;
+  bool force = false;
+  PointsPolicy points = PointsPolicy::kAuto;
+  datagen::ColmapOptions colmap;
+  evaluator::ScoringOptions scoring;
+
+  void validate() const;  // InputError naming the field
+};
+
+struct ReconstructResult {
+  evaluator::Results results;
+  std::string initialization;  // "dataset sparse/0", "triangulated: N points", "random (...)"
+  bool resumed = false;
+  double train_seconds = 0, render_seconds_per_view = 0, peak_rss_mb = 0;
+};
+
+// Progress: the trainer's per-iteration callback, and one line per stage (may be empty).
+using StageCallback = std::function<void(const std::string& stage)>;
+ReconstructResult reconstruct(const ReconstructOptions& options, const recon::IterationCallback& on_iteration = {},
+                              const StageCallback& on_stage = {});
+
+}  // namespace weathergs::study

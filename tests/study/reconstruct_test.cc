@@ -1,0 +1,150 @@
+// weathergs reconstruct: each method's recipe, the run folder, completion and resumption, COLMAP
+// fallback, bad input. On a small weathered synthetic street (tests/generator/test_scene.h).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "core/dataset.h"
+#include "core/json_reader.h"
+#include "datagen/process.h"
+#include "study/reconstruct.h"
+#include "tests/core/test_util.h"
+#include "tests/generator/test_scene.h"
+
+namespace weathergs::study {
+namespace {
+
+namespace fs = std::filesystem;
+using weathergs::testing::TempDir;
+
+int run_cli(const std::string& args, const std::string& log) {
+  const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet " + args + " > '" + log + "' 2>&1").c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+// Nine views of the synthetic street with heavy paper-style rain and lens drops (images/, masks/).
+std::string weathered_dataset(const TempDir& tmp) {
+  weathergs::testing::SceneOptions so;
+  so.views = 9;
+  weathergs::testing::make_clean_dataset(tmp / "clean", so);
+  write_file_atomic(tmp / "spec.json", R"({"seed": 3, "style": "paper", "effects": {"rain": {"intensity": "heavy"},
+      "lens_droplets": {"count": 8}}})");
+  const std::string out = tmp / "rain";
+  EXPECT_EQ(run_cli("weather --in " + (tmp / "clean") + " --spec " + (tmp / "spec.json") + " --out " + out, tmp / "w.log"), 0)
+      << read_file(tmp / "w.log");
+  return out;
+}
+
+ReconstructOptions options(const std::string& data, const std::string& out, Method m) {
+  ReconstructOptions o;
+  o.dataset = data;
+  o.out = out;
+  o.method = m;
+  o.iterations = 200;
+  o.seed = 2;
+  o.checkpoint_every = 50;
+  o.points = PointsPolicy::kDataset;  // no COLMAP: the random initialization (fast, deterministic)
+  o.scoring.lpips = false;
+  return o;
+}
+
+TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  std::map<Method, double> psnr;
+  for (Method m : all_methods()) {
+    SCOPED_TRACE(to_string(m));
+    const std::string out = tmp / (std::string("run_") + to_string(m));
+    std::vector<std::string> stages;
+    int iterations_seen = 0;
+    const ReconstructResult r = reconstruct(
+        options(data, out, m), [&](const recon::IterationStats&) { ++iterations_seen; },
+        [&](const std::string& s) { stages.push_back(s); });
+    EXPECT_EQ(iterations_seen, 200);
+    EXPECT_GE(stages.size(), 3u);
+    // The run folder: model, test renders with info.json, results.json last.
+    const Json run = read_json_file(out + "/model/run.json");
+    const Recipe rec = recipe(m);
+    EXPECT_EQ(run.at("images"), recon::to_string(rec.images));
+    EXPECT_EQ(run.at("masks"), recon::to_string(rec.masks));
+    EXPECT_TRUE(run.at("complete").get<bool>());
+    const Dataset ds = read_dataset(data);
+    for (const std::string& v : ds.split("test")) EXPECT_TRUE(fs::exists(out + "/renders/test/" + v + ".png")) << v;
+    const evaluator::Results res = evaluator::read_results(out + "/results.json");
+    EXPECT_EQ(res.method, to_string(m));
+    EXPECT_EQ(res.per_view.size(), ds.split("test").size());
+    EXPECT_TRUE(res.method_info.contains("train_seconds") && res.method_info.contains("render_seconds"));
+    EXPECT_TRUE(res.method_info.contains("peak_rss_mb"));
+    EXPECT_EQ(res.method_info.at("initialization"), "random (the dataset has no SfM points)");
+    EXPECT_GT(r.train_seconds, 0);
+    psnr[m] = r.results.metrics.psnr;
+  }
+  std::printf("test PSNR after 200 iterations: 3dgs %.2f, gt-masks %.2f, oracle %.2f dB\n", psnr[Method::k3dgs],
+              psnr[Method::kGtMasks], psnr[Method::kOracle]);
+  // The oracle trains on the ground truth itself: it must beat training on the weathered images.
+  EXPECT_GT(psnr[Method::kOracle], psnr[Method::k3dgs]);
+}
+
+TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  const std::string a = tmp / "a", b = tmp / "b";
+  reconstruct(options(data, a, Method::k3dgs));
+  EXPECT_THROW(reconstruct(options(data, a, Method::k3dgs)), InputError);  // complete: needs force
+  // An interrupted run: stop b's training at iteration 120 (through the trainer's own checkpoint at
+  // 100), then reconstruct again: it resumes and ends in a@200's model, byte for byte.
+  struct Stop {};
+  try {
+    reconstruct(options(data, b, Method::k3dgs), [](const recon::IterationStats& st) {
+      if (st.iteration == 120) throw Stop{};
+    });
+    ADD_FAILURE() << "not interrupted";
+  } catch (const Stop&) {
+  }
+  EXPECT_FALSE(fs::exists(b + "/results.json"));
+  const ReconstructResult r = reconstruct(options(data, b, Method::k3dgs));
+  EXPECT_TRUE(r.resumed);
+  EXPECT_EQ(read_file(a + "/model/point_cloud.ply"), read_file(b + "/model/point_cloud.ply"));
+  // force redoes a complete run from scratch (the same model again).
+  ReconstructOptions f = options(data, a, Method::k3dgs);
+  f.force = true;
+  EXPECT_FALSE(reconstruct(f).resumed);
+  EXPECT_EQ(read_file(a + "/model/point_cloud.ply"), read_file(b + "/model/point_cloud.ply"));
+}
+
+TEST(ReconstructTest, WithoutPointsItTriangulatesIntoTheRunOrFallsBackWithAWarning) {
+  if (datagen::find_executable("colmap").empty()) GTEST_SKIP() << "colmap not installed";
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  ReconstructOptions o = options(data, tmp / "run", Method::k3dgs);
+  o.points = PointsPolicy::kAuto;
+  o.colmap.num_threads = 2;
+  std::vector<std::string> stages;
+  const ReconstructResult r = reconstruct(o, {}, [&](const std::string& s) { stages.push_back(s); });
+  // Either COLMAP triangulated points into the run folder, or it found none and the run says so.
+  if (fs::exists(tmp / "run/sparse/0/points3D.txt") && r.initialization.rfind("triangulated", 0) == 0) {
+    EXPECT_NE(read_json_file(tmp / "run/model/run.json").at("initialization").get<std::string>().find("colmap:"),
+              std::string::npos);
+  } else {
+    EXPECT_EQ(r.initialization, "random (COLMAP found no points)");
+    bool warned = false;
+    for (const std::string& s : stages) warned |= s.find("warning: triangulation failed") != std::string::npos;
+    EXPECT_TRUE(warned);
+  }
+  std::printf("initialization: %s\n", r.initialization.c_str());
+  EXPECT_FALSE(fs::exists(data + "/sparse")) << "the dataset itself must stay untouched";
+}
+
+TEST(ReconstructTest, BadInputThroughTheCli) {
+  TempDir tmp;
+  EXPECT_EQ(run_cli("reconstruct --data " + (tmp / "none") + " --method 3dgs --out " + (tmp / "r"), tmp / "1.log"), 2);
+  EXPECT_NE(read_file(tmp / "1.log").find(tmp / "none"), std::string::npos) << read_file(tmp / "1.log");
+  EXPECT_EQ(run_cli("reconstruct --data " + (tmp / "none") + " --method nerf --out " + (tmp / "r"), tmp / "2.log"), 2);
+  EXPECT_NE(read_file(tmp / "2.log").find("nerf"), std::string::npos) << read_file(tmp / "2.log");
+  EXPECT_FALSE(fs::exists(tmp / "r"));
+}
+
+}  // namespace
+}  // namespace weathergs::study
