@@ -62,6 +62,9 @@ Command make(CLI::App& root) {
   sub->add_option("--out", a->options.out, "Run folder")->required();
   sub->add_option("--iterations", a->options.iterations, "Training iterations")->capture_default_str();
   sub->add_option("--seed", a->options.seed, "Random seed")->capture_default_str();
+  sub->add_option("--random-init-count", a->options.random_init_count,
+                  "Gaussians of the random initialization (used when there are no SfM points)")
+      ->capture_default_str();
   sub->add_option("--checkpoint-every", a->options.checkpoint_every, "Iterations between checkpoints (0 = only at the end)")
       ->capture_default_str();
   sub->add_flag("--force", a->options.force, "Redo a complete run");

@@ -35,6 +35,7 @@ void ReconstructOptions::validate() const {
   if (dataset.empty()) throw InputError("reconstruct options", "dataset is empty: the dataset folder is required");
   if (out.empty()) throw InputError("reconstruct options", "out is empty: the run folder is required");
   if (iterations < 1) throw InputError("reconstruct options", "iterations " + std::to_string(iterations) + " must be >= 1");
+  if (random_init_count < 1) throw InputError("reconstruct options", "random_init_count must be >= 1");
   if (checkpoint_every < 0) throw InputError("reconstruct options", "checkpoint_every must be >= 0");
   colmap.validate();
 }
@@ -101,6 +102,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   t.checkpoint_every = o.checkpoint_every;
   t.train.iterations = o.iterations;
   t.train.seed = o.seed;
+  t.train.random_init_count = o.random_init_count;
   const fs::path run_json = run / kModelDir / "run.json";
   bool trained = false;
   if (fs::exists(run_json)) {

@@ -32,6 +32,7 @@ struct ReconstructOptions {
   Method method = Method::k3dgs;
   int iterations = 30000;
   uint64_t seed = 0;
+  int random_init_count = 50000;  // Gaussians of the random initialization (when no SfM points)
   int checkpoint_every = 1000;
   bool force = false;
   PointsPolicy points = PointsPolicy::kAuto;
