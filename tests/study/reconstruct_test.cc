@@ -84,7 +84,8 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
   }
   std::printf("test PSNR after 300 iterations: 3dgs %.2f, gt-masks %.2f, oracle %.2f dB\n", psnr[Method::k3dgs],
               psnr[Method::kGtMasks], psnr[Method::kOracle]);
-  // The oracle trains on the ground truth itself: it must beat training on the weathered images.
+  // The wall texture is value noise of ~2 px cells, so 300 iterations reach low absolute PSNR; what is
+  // checked is the order: the oracle trains on the ground truth itself and must beat the weathered run.
   EXPECT_GT(psnr[Method::kOracle], psnr[Method::k3dgs]);
 }
 
