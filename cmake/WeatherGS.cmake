@@ -3,10 +3,11 @@
 # The parts in build order (a part comes after every part it needs), and the parts each one needs.
 # A part's libraries may link exactly the parts it needs (and core); anything else is a configure
 # error (docs/architecture.md).
-set(WEATHERGS_ALL_PARTS evaluator generator reconstruction datagen study)
+set(WEATHERGS_ALL_PARTS evaluator generator reconstruction restoration datagen study)
 set(WEATHERGS_PART_NEEDS_evaluator "")
 set(WEATHERGS_PART_NEEDS_generator "")
 set(WEATHERGS_PART_NEEDS_reconstruction "")
+set(WEATHERGS_PART_NEEDS_restoration "")
 # datagen makes whole benchmark datasets (Blender, the generator, COLMAP): one layer above the generator.
 set(WEATHERGS_PART_NEEDS_datagen "generator")
 # study runs whole methods on datasets (train, render, evaluate; COLMAP points when a dataset has
