@@ -9,7 +9,7 @@ namespace weathergs::cli {
 namespace {
 
 struct EvaluateArgs {
-  std::string gt, renders, method, split = "test", mask_dir, output;
+  std::string gt, renders, method, split = "test", mask_dir, output, ground_truth = "clean";
   ScoringFlags scoring;
 };
 
@@ -19,6 +19,9 @@ int run_evaluate(const EvaluateArgs& args) {
   o.renders_dir = args.renders;
   o.method = args.method;
   o.split = args.split;
+  if (args.ground_truth == "images") o.ground_truth = ImageKind::kImages;
+  if (args.ground_truth == "no_particles") o.ground_truth = ImageKind::kTargetNoParticles;
+  if (args.ground_truth == "lens_only") o.ground_truth = ImageKind::kTargetLensOnly;
   if (!args.mask_dir.empty()) o.mask_dir = args.mask_dir;
   o.scoring = args.scoring.options();
   evaluator::Results r = evaluator::evaluate(o);
@@ -38,6 +41,10 @@ Command make_evaluate(CLI::App& root) {
   sub->add_option("--renders", args->renders, "Folder with <view>.png per split view (+ optional info.json)")->required();
   sub->add_option("--method", args->method, "Method name (default: \"method\" from the renders' info.json)");
   sub->add_option("--split", args->split, "Split to score")->capture_default_str();
+  sub->add_option("--ground-truth", args->ground_truth,
+                  "Score against: clean (the benchmark), images, or a generator target: no_particles "
+                  "(particles removed, lens drops kept: scores a particle filter), lens_only")
+      ->capture_default_str()->check(CLI::IsMember({"clean", "images", "no_particles", "lens_only"}));
   sub->add_option("--mask-dir", args->mask_dir, "Masks <view>.png (255 = exclude): metrics over valid pixels only");
   sub->add_option("-o,--output", args->output, "Results JSON to write (atomically)")->required();
   args->scoring.add_to(sub);

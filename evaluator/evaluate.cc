@@ -57,8 +57,10 @@ void EvaluateOptions::validate() const {
   if (gt_dataset.empty()) throw InputError(where, "gt_dataset is empty: the dataset folder is required");
   if (renders_dir.empty()) throw InputError(where, "renders_dir is empty: the renders folder is required");
   if (split.empty()) throw InputError(where, "split is empty");
-  if (ground_truth != ImageKind::kClean && ground_truth != ImageKind::kImages)
-    throw InputError(where, std::string("ground_truth is ") + to_string(ground_truth) + ": must be clean or images");
+  if (ground_truth != ImageKind::kClean && ground_truth != ImageKind::kImages &&
+      ground_truth != ImageKind::kTargetNoParticles && ground_truth != ImageKind::kTargetLensOnly)
+    throw InputError(where, std::string("ground_truth is ") + to_string(ground_truth) +
+                                ": must be clean, images or a target (target_no_particles, target_lens_only)");
 }
 
 Results evaluate(const EvaluateOptions& o) {
@@ -67,9 +69,10 @@ Results evaluate(const EvaluateOptions& o) {
   const std::vector<std::string>& views = ds.split(o.split);
   if (views.empty()) throw InputError(ds.file(layout::kDatasetJson) + ":/splits/" + o.split, "split is empty");
   if (!ds.has(o.ground_truth))
-    throw InputError(ds.dir(o.ground_truth), std::string("no ") + folder_of(o.ground_truth) +
-                                                 "/ folder: this dataset has no clean ground truth "
-                                                 "(imported real footage cannot be scored)");
+    throw InputError(ds.dir(o.ground_truth),
+                     std::string("no ") + folder_of(o.ground_truth) +
+                         "/ folder: this dataset has no such ground truth (imported real footage has no clean/; "
+                         "the targets come from generate --targets)");
   if (!fs::is_directory(o.renders_dir)) throw InputError(o.renders_dir, "renders directory does not exist");
 
   // Renders must be exactly the split's views.
@@ -104,6 +107,7 @@ Results evaluate(const EvaluateOptions& o) {
   r.protocol.lpips = o.scoring.lpips ? std::optional<std::string>("alex_v0.1") : std::nullopt;
   r.protocol.quantize_uint8 = o.scoring.quantize_uint8;
   r.protocol.split = o.split;
+  if (o.ground_truth != ImageKind::kClean) r.protocol.ground_truth = folder_of(o.ground_truth);
   if (o.mask_dir) r.protocol.mask = fs::path(*o.mask_dir).lexically_normal().filename().string();
 
   std::unique_ptr<Lpips> lpips;

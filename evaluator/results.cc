@@ -71,6 +71,7 @@ Json results_to_json(const Results& r) {
                    {"quantize_uint8", r.protocol.quantize_uint8},
                    {"split", r.protocol.split},
                    {"mask", r.protocol.mask ? Json(*r.protocol.mask) : Json(nullptr)}};
+  if (r.protocol.ground_truth) protocol["ground_truth"] = *r.protocol.ground_truth;
   Json j = {{"format", "weathergs-results"}, {"version", 1}, {"method", r.method}, {"dataset", r.dataset},
             {"scene", r.scene}, {"weather", r.weather}, {"protocol", protocol},
             {"metrics", metrics_to_json(r.metrics)}, {"per_view", per_view},
@@ -97,6 +98,7 @@ Results results_from_json(const JsonReader& r) {
   out.protocol.quantize_uint8 = p.get<bool>("quantize_uint8");
   out.protocol.split = p.get<std::string>("split");
   out.protocol.mask = p.get_optional<std::string>("mask");
+  out.protocol.ground_truth = p.get_optional<std::string>("ground_truth");
   p.finish();
   out.metrics = metrics_from_json(r.child("metrics"));
   if (r.has("per_view")) {

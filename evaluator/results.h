@@ -26,9 +26,12 @@ struct Protocol {
   bool quantize_uint8 = true;
   std::string split = "test";
   std::optional<std::string> mask;  // mask folder name when masked metrics were used
+  // The dataset folder scored against when it is not clean/ (e.g. "targets/no_particles" to score a
+  // particle filter); nullopt = clean/, the benchmark's ground truth. Optional in results.json.
+  std::optional<std::string> ground_truth;
   bool operator==(const Protocol& o) const {
     return ssim == o.ssim && lpips == o.lpips && quantize_uint8 == o.quantize_uint8 && split == o.split &&
-           mask == o.mask;
+           mask == o.mask && ground_truth == o.ground_truth;
   }
   std::string to_string() const;
 };
