@@ -22,7 +22,8 @@ echo "|---|---|---|---:|---:|---|---:|"
 for d in "$SUITE"/*/; do
   d=${d%/}; name=$(basename "$d")
   [ -f "$d/dataset.json" ] && [ -d "$d/targets/no_particles" ] || continue
-  "$W" --quiet filter --data "$d" --out "$OUT/$name/filtered" > "$OUT/$name/filter.log" 2>&1 || { mkdir -p "$OUT/$name"; "$W" --quiet filter --data "$d" --out "$OUT/$name/filtered" > "$OUT/$name/filter.log"; }
+  mkdir -p "$OUT/$name"
+  "$W" --quiet filter --data "$d" --out "$OUT/$name/filtered" > /dev/null
   "$W" --quiet filter --data "$d" --images clean --out "$OUT/$name/filtered_clean" > /dev/null
   split_dir "$d/images" "$d" train "$OUT/$name/in"
   split_dir "$OUT/$name/filtered" "$d" train "$OUT/$name/out"
