@@ -12,7 +12,7 @@ set(WEATHERGS_PART_NEEDS_restoration "")
 set(WEATHERGS_PART_NEEDS_datagen "generator")
 # study runs whole methods on datasets (train, render, evaluate; COLMAP points when a dataset has
 # none): the top library layer, below apps only.
-set(WEATHERGS_PART_NEEDS_study "reconstruction;evaluator;datagen")
+set(WEATHERGS_PART_NEEDS_study "reconstruction;restoration;evaluator;datagen")
 
 set(WEATHERGS_ALLOWED_DEPS_core "")
 foreach(part IN LISTS WEATHERGS_ALL_PARTS)

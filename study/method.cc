@@ -9,12 +9,13 @@ const char* to_string(Method m) {
     case Method::k3dgs: return "3dgs";
     case Method::kOracle: return "oracle";
     case Method::kGtMasks: return "gt-masks";
+    case Method::kAefTophat: return "aef-tophat";
   }
   WGS_CHECK(false);
   return "";
 }
 
-std::vector<Method> all_methods() { return {Method::k3dgs, Method::kOracle, Method::kGtMasks}; }
+std::vector<Method> all_methods() { return {Method::k3dgs, Method::kOracle, Method::kGtMasks, Method::kAefTophat}; }
 
 Method parse_method(const std::string& name, const std::string& where) {
   std::string known;
@@ -30,6 +31,7 @@ std::string method_description(Method m) {
     case Method::k3dgs: return "vanilla 3DGS on the weathered images";
     case Method::kOracle: return "3DGS on the clean images and their SfM points (upper bound)";
     case Method::kGtMasks: return "3DGS on the weathered images, ground-truth particle and lens masks excluded from the loss";
+    case Method::kAefTophat: return "classical particle filter (morphological top-hat) on every view, then 3DGS";
   }
   WGS_CHECK(false);
   return "";
@@ -44,6 +46,7 @@ Recipe recipe(Method m) {
       r.clean_points = true;
       break;
     case Method::kGtMasks: r.masks = recon::TrainMasks::kAll; break;
+    case Method::kAefTophat: r.particle_filter = true; break;
   }
   return r;
 }

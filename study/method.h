@@ -14,6 +14,8 @@ enum class Method {
   k3dgs,     // vanilla 3DGS on the weathered images (the paper's baseline)
   kOracle,   // 3DGS on the clean images and their SfM points: the upper bound
   kGtMasks,  // 3DGS on the weathered images with the generator's particle and lens masks excluded
+  kAefTophat,  // the classical AEF (restoration/particle_filter.h) on every view, then 3DGS on the
+               // filtered images: WeatherGS's first stage without learned weights and without the LED
 };
 const char* to_string(Method m);
 std::vector<Method> all_methods();
@@ -25,6 +27,7 @@ struct Recipe {
   recon::TrainImages images = recon::TrainImages::kImages;
   recon::TrainMasks masks = recon::TrainMasks::kNone;
   bool clean_points = false;  // initialize from sparse_clean/0 (clean/ triangulated) instead of sparse/0
+  bool particle_filter = false;  // train on the classical AEF's restored images (RUN/filtered/)
 };
 Recipe recipe(Method m);
 

@@ -7,6 +7,7 @@
 #include "core/dataset_layout.h"
 #include "core/error.h"
 #include "core/json_reader.h"
+#include "restoration/filter_dataset.h"
 
 namespace weathergs::study {
 
@@ -17,6 +18,7 @@ namespace {
 constexpr const char* kModelDir = "model";
 constexpr const char* kRendersDir = "renders/test";
 constexpr const char* kResultsFile = "results.json";
+constexpr const char* kFilteredDir = "filtered";
 
 bool has_points(const std::string& model_dir) {
   const fs::path p = fs::path(model_dir) / "points3D.txt";
@@ -92,11 +94,20 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   }
   if (out.initialization.empty()) out.initialization = "random (the dataset has no SfM points)";
 
-  // 2. Training (resumed when an earlier run of the same options stopped part way).
+  // 2. Restoration: the classical AEF on every view (kept when an earlier run made it).
+  if (r.particle_filter && !fs::exists(run / kFilteredDir / "filter.json")) {
+    stage("filtering particles (classical AEF) on every view");
+    restoration::FilterDatasetOptions f;
+    f.filter = o.particle_filter;
+    restoration::filter_dataset(o.dataset, (run / kFilteredDir).string(), f);
+  }
+
+  // 3. Training (resumed when an earlier run of the same options stopped part way).
   recon::TrainRunOptions t;
   t.dataset = o.dataset;
   t.inputs.images = r.images;
   t.inputs.masks = r.masks;
+  if (r.particle_filter) t.inputs.images_dir = (run / kFilteredDir).string();
   t.inputs.points_dir = points_dir;
   t.out = (run / kModelDir).string();
   t.checkpoint_every = o.checkpoint_every;
@@ -118,7 +129,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     out.peak_rss_mb = tr.peak_rss_mb;
   }
 
-  // 3. Test renders, then 4. the evaluation; results.json last.
+  // 4. Test renders, then 5. the evaluation; results.json last.
   stage("rendering the test views");
   recon::RenderRunOptions rr;
   rr.model = t.out;

@@ -2,6 +2,7 @@
 // none, training, test renders, evaluation against the clean ground truth.
 //
 // The run folder:
+//   filtered/           aef-tophat: the classical AEF's images of every view (+ masks/, filter.json)
 //   sparse/0/           COLMAP points triangulated here when the dataset has none (the dataset itself
 //                       is never modified); logs/colmap/ its logs
 //   model/              the training run (reconstruction/run.h: run.json, point_cloud.ply, checkpoint)
@@ -16,6 +17,7 @@
 #include "datagen/colmap.h"
 #include "evaluator/evaluate.h"
 #include "reconstruction/run.h"
+#include "restoration/particle_filter.h"
 #include "study/method.h"
 
 namespace weathergs::study {
@@ -38,6 +40,7 @@ struct ReconstructOptions {
   PointsPolicy points = PointsPolicy::kAuto;
   datagen::ColmapOptions colmap;
   evaluator::ScoringOptions scoring;
+  restoration::ParticleFilterOptions particle_filter;  // aef-tophat
 
   void validate() const;  // InputError naming the field
 };
