@@ -71,6 +71,12 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
     EXPECT_EQ(run.at("images"), recon::to_string(rec.images));
     EXPECT_EQ(run.at("masks"), recon::to_string(rec.masks));
     EXPECT_TRUE(run.at("complete").get<bool>());
+    if (rec.particle_filter) {  // trained on the classical AEF's images of every view
+      EXPECT_EQ(run.at("images_dir").get<std::string>(), out + "/filtered");
+      EXPECT_TRUE(fs::exists(out + "/filtered/filter.json"));
+    } else {
+      EXPECT_TRUE(run.at("images_dir").is_null());
+    }
     const Dataset ds = read_dataset(data);
     for (const std::string& v : ds.split("test")) EXPECT_TRUE(fs::exists(out + "/renders/test/" + v + ".png")) << v;
     const evaluator::Results res = evaluator::read_results(out + "/results.json");
@@ -82,8 +88,8 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
     EXPECT_GT(r.train_seconds, 0);
     psnr[m] = r.results.metrics.psnr;
   }
-  std::printf("test PSNR after 300 iterations: 3dgs %.2f, gt-masks %.2f, oracle %.2f dB\n", psnr[Method::k3dgs],
-              psnr[Method::kGtMasks], psnr[Method::kOracle]);
+  std::printf("test PSNR after 300 iterations: 3dgs %.2f, gt-masks %.2f, aef-tophat %.2f, oracle %.2f dB\n",
+              psnr[Method::k3dgs], psnr[Method::kGtMasks], psnr[Method::kAefTophat], psnr[Method::kOracle]);
   // The wall texture is value noise of ~2 px cells, so 300 iterations reach low absolute PSNR; what is
   // checked is the order: the oracle trains on the ground truth itself and must beat the weathered run.
   EXPECT_GT(psnr[Method::kOracle], psnr[Method::k3dgs]);
