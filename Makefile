@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-asan fuzz interop demo clean
+.PHONY: all deps configure build test test-slow test-asan fuzz interop suite demo clean
 
 all: build
 
@@ -61,6 +61,12 @@ interop: build
 	@if [ ! -f interop/node_modules/.package-lock.json ] || [ interop/package-lock.json -nt interop/node_modules/.package-lock.json ]; then \
 	  cd interop && npm ci --no-audit --no-fund; fi
 	bash interop/run.sh $(BUILD)
+
+# The benchmark suite (workflow/Snakefile, docs/study.md): SUITE_CONFIG="profile=quick iterations=7000 ..."
+SUITE_CONFIG ?=
+suite: build
+	USER=$${USER:-weathergs} snakemake -s workflow/Snakefile --cores $(JOBS) \
+	  --config weathergs=$(CURDIR)/$(BUILD)/apps/weathergs scenes=$(CURDIR)/scenes $(SUITE_CONFIG)
 
 test-slow: build
 	cd $(BUILD) && ctest --output-on-failure --label-regex slow

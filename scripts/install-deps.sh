@@ -13,6 +13,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   # scene rendering and structure from motion
   blender colmap
+  # the benchmark suite workflow (workflow/Snakefile)
+  snakemake
   # reference checks (scikit-image SSIM reference values, plots)
   python3-numpy python3-skimage python3-matplotlib
 )
