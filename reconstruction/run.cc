@@ -49,6 +49,7 @@ Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool c
               {"num_gaussians", t.gaussians().size()},
               {"train_seconds", seconds},
               {"peak_rss_mb", peak_rss_mb()},
+              {"densify_capped", t.densify_capped()},
               {"extent", t.extent()},
               {"options", t.options().to_json()},
               {"effective_schedule", schedule_json(t.effective_options())}};
@@ -88,6 +89,7 @@ RunInfo read_run_json(const std::string& run_dir) {
   info.train_seconds = r.get<double>("train_seconds");
   info.peak_rss_mb = r.get<double>("peak_rss_mb");
   r.get<double>("extent");
+  r.get_optional<int>("densify_capped");
   info.options = TrainOptions::from_json(r.child("options"));
   r.mark("effective_schedule");  // derived from options
   r.finish();

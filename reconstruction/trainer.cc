@@ -59,6 +59,7 @@ void TrainOptions::validate(const std::string& where) const {
   positive("percent_dense", percent_dense);
   positive("densify_grad_threshold", densify_grad_threshold);
   positive("max_world_size", max_world_size);
+  if (max_gaussians < 1) fail("max_gaussians", std::to_string(max_gaussians), "must be >= 1");
   if (!(lambda_dssim >= 0 && lambda_dssim <= 1)) fail("lambda_dssim", std::to_string(lambda_dssim), "must be in [0, 1]");
   if (!(adam_beta1 >= 0 && adam_beta1 < 1)) fail("adam_beta1", std::to_string(adam_beta1), "must be in [0, 1)");
   if (!(adam_beta2 >= 0 && adam_beta2 < 1)) fail("adam_beta2", std::to_string(adam_beta2), "must be in [0, 1)");
@@ -104,6 +105,7 @@ Json TrainOptions::to_json() const {
               {"min_opacity", min_opacity},
               {"max_screen_size_px", max_screen_size_px},
               {"max_world_size", max_world_size},
+              {"max_gaussians", max_gaussians},
               {"background", {background[0], background[1], background[2]}},
               {"random_init", to_string(random_init)},
               {"random_init_count", random_init_count},
@@ -164,6 +166,7 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.min_opacity = r.get_or("min_opacity", o.min_opacity);
   o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
   o.max_world_size = r.get_or("max_world_size", o.max_world_size);
+  o.max_gaussians = r.get_or<int64_t>("max_gaussians", o.max_gaussians);
   if (r.has("background")) {
     JsonReader b = r.child("background");
     if (!b.is_array() || b.size() != 3) throw InputError(b.where(), "expected an array of 3 numbers");
@@ -401,6 +404,24 @@ void Trainer::densify_and_prune(bool prune_large) {
     const float max_scale = std::exp(std::max({g_.log_scale[i * 3], g_.log_scale[i * 3 + 1], g_.log_scale[i * 3 + 2]}));
     if (max_scale <= dense) clone[i] = 1, ++num_clone;
     else split[i] = 1, ++num_split;
+  }
+  // The memory guard: a clone adds one Gaussian, a split adds one net (two copies replace the
+  // original). Over budget, keep the candidates with the largest mean gradient.
+  const int64_t budget = options_.max_gaussians - int64_t(n);
+  if (int64_t(num_clone + num_split) > std::max<int64_t>(budget, 0)) {
+    std::vector<std::pair<float, size_t>> ranked;
+    for (size_t i = 0; i < n; ++i)
+      if (clone[i] || split[i]) ranked.push_back({grad_accum_[i] / float(grad_count_[i]), i});
+    std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
+      return a.first != b.first ? a.first > b.first : a.second < b.second;
+    });
+    for (size_t k = size_t(std::max<int64_t>(budget, 0)); k < ranked.size(); ++k) {
+      const size_t i = ranked[k].second;
+      num_clone -= clone[i];
+      num_split -= split[i];
+      clone[i] = split[i] = 0;
+    }
+    ++densify_capped_;
   }
   // Layout after densification, as the reference builds it: [originals, clones, split copy 0 of
   // every selected, split copy 1 of every selected]; then the split originals are removed.

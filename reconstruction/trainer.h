@@ -41,6 +41,11 @@ struct TrainOptions {
   double min_opacity = 0.005;         // prune below
   int max_screen_size_px = 20;        // see docs/reconstruction.md: inert as in the reference
   double max_world_size = 0.1;        // prune scale > this fraction of the extent (after first reset)
+  // Memory guard (docs/reliability.md, "Resources"): densification never grows the model beyond this
+  // many Gaussians; when the candidates would, only those with the largest mean view-space gradient
+  // (ties: lower index) are cloned or split. The trainer's peak memory is ~2.6 KiB per Gaussian at
+  // 300x200 (measured), so 1.2M keeps a run under ~4 GB. The reference has no cap.
+  int64_t max_gaussians = 1200000;
   std::array<double, 3> background = {0, 0, 0};  // sRGB in [0, 1]
   // Short runs: the reference schedule (densify from 500 to 15000 every 100, reset opacity every
   // 3000, SH degree + 1 every 1000) is made for 30000 iterations; run as is, `--iterations 3000` ends
@@ -100,6 +105,8 @@ class Trainer {
   IterationStats step();
   int iteration() const { return iteration_; }
   int sh_degree() const { return sh_degree_; }
+  // Densification steps at which the max_gaussians guard held candidates back (0 = never).
+  int densify_capped() const { return densify_capped_; }
   const GaussianSet<float>& gaussians() const { return g_; }
   GaussianSet<float>& mutable_gaussians() { return g_; }  // tests inject faults through this
   const TrainOptions& options() const { return requested_; }    // as given (run.json, resume)
@@ -133,6 +140,7 @@ class Trainer {
   RasterState<float> state_;
   int iteration_ = 0;
   int sh_degree_ = 0;
+  int densify_capped_ = 0;
 };
 
 // Peak resident set size of this process in MiB (getrusage).

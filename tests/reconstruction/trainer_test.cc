@@ -132,6 +132,31 @@ TEST(TrainerTest, SameSeedSameResultWithOneOrTwoThreads) {
   EXPECT_TRUE(a == b) << "PLY files differ between 1 and 2 threads";
 }
 
+TEST(TrainerTest, MaxGaussiansCapsDensificationDeterministically) {
+  Scene s = make_scene(150, 64, 48, 4);
+  auto run = [&](int64_t cap, int* capped) {
+    TrainOptions o = busy_options(60);
+    o.max_gaussians = cap;
+    Trainer t(s.views, point_init(s.truth, 2), o, scene_extent(cameras_of(s.views)));
+    size_t max_n = 0;
+    while (t.iteration() < 60) max_n = std::max<size_t>(max_n, t.step().num_gaussians);
+    *capped = t.densify_capped();
+    return max_n;
+  };
+  int capped_free = 0, capped = 0, capped_again = 0;
+  const size_t free_n = run(1000000, &capped_free);
+  const size_t n = run(170, &capped);
+  EXPECT_EQ(capped_free, 0);
+  EXPECT_GT(free_n, 170u);  // without the cap this run grows past it
+  EXPECT_LE(n, 170u);
+  EXPECT_GT(n, 150u);       // the budget was used, not refused
+  EXPECT_GT(capped, 0);
+  EXPECT_EQ(run(170, &capped_again), n);
+  TrainOptions bad;
+  bad.max_gaussians = 0;
+  EXPECT_THROW(bad.validate("x"), InputError);
+}
+
 TEST(TrainerTest, ResumeFromCheckpointEqualsUninterruptedRun) {
   Scene s = make_scene(120, 48, 36, 4);
   weathergs::testing::TempDir dir;
