@@ -37,6 +37,7 @@ int run_train(TrainArgs& args) {
     if (!given("--background")) o.train.background = stored.train.background;
     if (!given("--random-init-count")) o.train.random_init_count = stored.train.random_init_count;
     if (!given("--random-init")) o.train.random_init = stored.train.random_init;
+    if (!given("--max-gaussians")) o.train.max_gaussians = stored.train.max_gaussians;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
@@ -88,6 +89,9 @@ Command make_train(CLI::App& root) {
   sub->add_option("--seed", o.train.seed, "Random seed (view order, splits, random init)")->capture_default_str();
   sub->add_option("--background", args->background, "Background colour R G B in [0, 1] (default 0 0 0)")
       ->expected(3);
+  sub->add_option("--max-gaussians", o.train.max_gaussians,
+                  "Memory guard: densification never grows the model beyond this many Gaussians (~2.6 KiB each)")
+      ->capture_default_str();
   sub->add_option("--random-init", args->random_init,
                   "Random initialization when the dataset has no COLMAP points: photo (each point at the depth "
                   "where neighbouring views agree) or frustum (uniform in inverse depth, random colours)")
