@@ -83,6 +83,11 @@ function(weathergs_add_test)
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 300)
   endif()
+  if(WEATHERGS_SANITIZE)
+    # ASan + UBSan run 3-5x slower (the trainer test took > 600 s): the limits scale with them.
+    math(EXPR ARG_TIMEOUT "${ARG_TIMEOUT} * 5")
+    target_compile_definitions(${exe} PRIVATE WEATHERGS_SANITIZED=1)
+  endif()
   # GTEST_SKIP (a missing tool) makes ctest report the test as skipped, not passed.
   set_tests_properties(${ARG_NAME} PROPERTIES TIMEOUT ${ARG_TIMEOUT} LABELS "${ARG_LABELS}"
                        SKIP_REGULAR_EXPRESSION "\\[  SKIPPED \\]")
