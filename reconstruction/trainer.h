@@ -52,7 +52,9 @@ struct TrainOptions {
   // on a reset. kScaled (default) scales densify_from, densify_until, opacity_reset_interval and
   // sh_degree_interval by s = iterations / 30000 (when s < 1) and densification_interval by s with a
   // floor of 10, so every run has the reference's shape: densification and resets in the first half,
-  // the last reset at 40% of the run, the second half to recover. s >= 1 leaves the reference's.
+  // the last reset at 40% of the run, the second half to recover. The reset interval keeps the
+  // reference's 30 densification steps per reset (a floor of 300 iterations), so runs shorter than
+  // 3000 iterations reset less often or never. s >= 1 leaves the reference's.
   // Only fields still at their reference value are scaled; a value set by hand is kept.
   enum class Schedule { kReference, kScaled };
   Schedule schedule = Schedule::kScaled;

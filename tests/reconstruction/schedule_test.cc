@@ -29,6 +29,11 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
     const int last_reset = ((x.densify_until - 1) / x.opacity_reset_interval) * x.opacity_reset_interval;
     EXPECT_LE(last_reset, iterations / 2) << iterations;
   }
+  // Short runs: at least 30 densification steps between resets (at 150 iterations a plain scaling
+  // reset every 15 iterations and pruning emptied the model), so no reset at all here.
+  o.iterations = 150;
+  EXPECT_EQ(o.effective().opacity_reset_interval, 300);
+  EXPECT_GT(o.effective().opacity_reset_interval, o.effective().densify_until);
   o.iterations = 30000;
   EXPECT_EQ(o.effective().to_json(), o.to_json());
   o.iterations = 3000;
