@@ -29,7 +29,7 @@ FilterDatasetReport filter_dataset(const std::string& dataset, const std::string
   for (const Camera& c : ds.cameras)
     if (!fs::exists(ds.path(o.input, c.name))) throw InputError(ds.path(o.input, c.name), "missing: view " + c.name);
   AtomicDirectory dir(out);
-  if (o.mode == FilterMode::kRestore) fs::create_directories(fs::path(dir.path()) / "masks");
+  if (o.mode == FilterMode::kRestore) fs::create_directories(fs::path(dir.path()) / kFilterMasksDir);
   FilterDatasetReport report;
   report.views.resize(ds.cameras.size());
   parallel_for(0, int64_t(ds.cameras.size()), [&](int64_t i) {
@@ -43,7 +43,7 @@ FilterDatasetReport filter_dataset(const std::string& dataset, const std::string
     const std::string name = c.name + layout::kImageExt;
     if (o.mode == FilterMode::kRestore) {
       write_image((fs::path(dir.path()) / name).string(), r.restored);
-      write_mask((fs::path(dir.path()) / "masks" / name).string(), r.mask);
+      write_mask((fs::path(dir.path()) / kFilterMasksDir / name).string(), r.mask);
     } else {
       write_mask((fs::path(dir.path()) / name).string(), r.mask);
     }
@@ -65,7 +65,7 @@ FilterDatasetReport filter_dataset(const std::string& dataset, const std::string
                  {"dilate_px", o.filter.dilate_px}}},
                {"seconds", report.seconds},
                {"views", views}};
-  write_file_atomic((fs::path(dir.path()) / "filter.json").string(), j.dump(2) + "\n");
+  write_file_atomic((fs::path(dir.path()) / kFilterReportFile).string(), j.dump(2) + "\n");
   dir.commit();
   return report;
 }

@@ -13,6 +13,8 @@ namespace weathergs::restoration {
 //          <out>/masks/<view>.png the particle masks; mask: <out>/<view>.png are the particle masks
 //          only (255 = particle: train on the raw pixels elsewhere with train --masks-dir).
 enum class FilterMode { kRestore, kMask };
+inline constexpr const char* kFilterMasksDir = "masks";          // restore mode: <out>/masks/<view>.png
+inline constexpr const char* kFilterReportFile = "filter.json";  // written last: the output is complete
 const char* to_string(FilterMode m);
 
 struct FilterDatasetOptions {

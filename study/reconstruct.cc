@@ -1,8 +1,8 @@
 #include "study/reconstruct.h"
 
 #include <filesystem>
-#include <fstream>
 
+#include "core/colmap_model.h"
 #include "core/dataset.h"
 #include "core/dataset_layout.h"
 #include "core/error.h"
@@ -22,13 +22,7 @@ constexpr const char* kFilteredDir = "filtered";
 
 bool has_points(const std::string& model_dir) {
   const fs::path p = fs::path(model_dir) / "points3D.txt";
-  if (!fs::exists(p)) return false;
-  // A points3D.txt with only comments holds no points (COLMAP writes that for an empty model).
-  std::ifstream in(p);
-  std::string line;
-  while (std::getline(in, line))
-    if (!line.empty() && line[0] != '#') return true;
-  return false;
+  return fs::exists(p) && !read_colmap_points3d(p.string()).empty();
 }
 
 }  // namespace
@@ -95,7 +89,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   if (out.initialization.empty()) out.initialization = "random (the dataset has no SfM points)";
 
   // 2. Restoration: the classical AEF on every view (kept when an earlier run made it).
-  if (r.particle_filter && !fs::exists(run / kFilteredDir / "filter.json")) {
+  if (r.particle_filter && !fs::exists(run / kFilteredDir / restoration::kFilterReportFile)) {
     stage("filtering particles (classical AEF) on every view");
     restoration::FilterDatasetOptions f;
     f.filter = o.particle_filter;
