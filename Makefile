@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-asan fuzz interop suite demo clean
+.PHONY: all deps configure build test test-slow test-asan fuzz interop suite demo clean training-data models
 
 all: build
 
@@ -41,6 +41,16 @@ test-asan: deps
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:fast_unwind_on_malloc=0 \
 	  ctest --output-on-failure --label-exclude slow -j $(JOBS)
+
+# The restoration training set (docs/restoration.md): four training scenes (scenes/training/), rendered
+# clear once and re-weathered with a fixed table of specs; a cache (existing datasets are kept).
+TRAINING_DATA ?= data/training
+training-data: build
+	bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) 12 quick
+
+# Retrains every weight file in models/ from scratch (models/README.md).
+models: training-data
+	bash scripts/train-models.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) models
 
 # libFuzzer harnesses (fuzz/README.md) in a clang build; FUZZ_SECONDS per harness (600 for the
 # documented runs).

@@ -4,6 +4,7 @@
 
 #include "apps/command.h"
 #include "apps/evaluator_flags.h"
+#include "apps/resources.h"
 #include "core/progress.h"
 #include "study/reconstruct.h"
 
@@ -14,6 +15,8 @@ struct ReconstructArgs {
   study::ReconstructOptions options;
   std::string method = "3dgs";
   bool no_triangulate = false;
+  std::string led_weights;
+  double led_threshold = 0;
   ScoringFlags scoring;
 };
 
@@ -22,6 +25,8 @@ int run(ReconstructArgs& a) {
   o.method = study::parse_method(a.method, "--method");
   o.points = a.no_triangulate ? study::PointsPolicy::kDataset : study::PointsPolicy::kAuto;
   o.scoring = a.scoring.options();
+  if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
+  if (a.led_threshold > 0) o.led_mask.threshold = a.led_threshold;
   ProgressBar bar("train", o.iterations);
   int reported = 0;
   auto on_iteration = [&](const recon::IterationStats& st) {
@@ -71,6 +76,11 @@ Command make(CLI::App& root) {
   sub->add_flag("--no-triangulate", a->no_triangulate,
                 "Never run COLMAP: without SfM points in the dataset, use the random initialization");
   sub->add_option("--colmap", a->options.colmap.executable, "COLMAP executable")->capture_default_str();
+  sub->add_option("--led-weights", a->led_weights,
+                  "Lens Effect Detector weights stem (weathergs, weathergs-no-aef); default $WEATHERGS_LED_WEIGHTS, else "
+                  "the installed models/led/led");
+  sub->add_option("--led-threshold", a->led_threshold, "LED mask threshold (default: the weights' calibrated one)")
+      ->check(CLI::Range(0.0, 1.0));
   a->scoring.add_to(sub);
   return {sub, [a] { return run(*a); }};
 }

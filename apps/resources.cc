@@ -41,6 +41,20 @@ std::string find_blender_script(const std::string& flag) {
                                          "\nInstall weathergs (cmake --install) or set WEATHERGS_BLENDER_SCRIPT.");
 }
 
+std::string find_led_weights(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (std::string e = env("WEATHERGS_LED_WEIGHTS"); !e.empty()) return e;
+  std::string searched;
+  for (const std::string& d : data_dirs()) {
+    const fs::path stem = fs::path(d) / "models" / "led" / "led";
+    if (fs::is_regular_file(stem.string() + ".json")) return stem.string();
+    searched += "\n  " + stem.string() + ".json";
+  }
+  throw InputError("LED weights", "models/led/led.json not found. Searched:" + searched +
+                                      "\nInstall weathergs (cmake --install), pass --weights, set WEATHERGS_LED_WEIGHTS, "
+                                      "or retrain with `make models`.");
+}
+
 std::vector<std::string> lpips_model_search(const std::string& flag) {
   if (!flag.empty()) return {flag};
   if (std::string e = env("WEATHERGS_LPIPS_MODEL"); !e.empty()) return {e};

@@ -22,6 +22,11 @@ std::vector<std::string> data_dirs();
 // blender_scripts/render_scene.py in the data directories. InputError naming every place searched.
 std::string find_blender_script(const std::string& flag);
 
+// The Lens Effect Detector weights stem (<stem>.json + <stem>.bin): `flag` if given, else
+// $WEATHERGS_LED_WEIGHTS, else models/led/led in the data directories (the repository's models/ is
+// staged there). InputError naming every place searched.
+std::string find_led_weights(const std::string& flag);
+
 // Where to look for the LPIPS model, in order: `flag` alone if given, else $WEATHERGS_LPIPS_MODEL alone
 // if set, else models/lpips in the data directories, then ./shared/models/lpips and
 // ../shared/models/lpips (a project checkout).

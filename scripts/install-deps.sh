@@ -11,6 +11,8 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libembree-dev
   nlohmann-json3-dev libtbb-dev libcli11-dev libfmt-dev libsqlite3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # the learned restoration networks (restoration/lens_detector.cc)
+  libtorch-dev
   # scene rendering and structure from motion
   blender colmap
   # the benchmark suite workflow (workflow/Snakefile)

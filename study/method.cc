@@ -10,12 +10,18 @@ const char* to_string(Method m) {
     case Method::kOracle: return "oracle";
     case Method::kGtMasks: return "gt-masks";
     case Method::kAefTophat: return "aef-tophat";
+    case Method::kWeatherGS: return "weathergs";
+    case Method::kWeatherGSNoAef: return "weathergs-no-aef";
+    case Method::kWeatherGSNoLed: return "weathergs-no-led";
   }
   WGS_CHECK(false);
   return "";
 }
 
-std::vector<Method> all_methods() { return {Method::k3dgs, Method::kOracle, Method::kGtMasks, Method::kAefTophat}; }
+std::vector<Method> all_methods() {
+  return {Method::k3dgs,     Method::kOracle,         Method::kGtMasks,       Method::kAefTophat,
+          Method::kWeatherGS, Method::kWeatherGSNoAef, Method::kWeatherGSNoLed};
+}
 
 Method parse_method(const std::string& name, const std::string& where) {
   std::string known;
@@ -32,6 +38,11 @@ std::string method_description(Method m) {
     case Method::kOracle: return "3DGS on the clean images and their SfM points (upper bound)";
     case Method::kGtMasks: return "3DGS on the weathered images, ground-truth particle and lens masks excluded from the loss";
     case Method::kAefTophat: return "classical particle filter (morphological top-hat) on every view, then 3DGS";
+    case Method::kWeatherGS:
+      return "WeatherGS: AEF (classical top-hat) on every view, LED on the filtered views averaged over the training "
+             "views, 3DGS with the LED mask excluded from the loss";
+    case Method::kWeatherGSNoAef: return "WeatherGS without the AEF: LED on the raw views, masked 3DGS on the raw images";
+    case Method::kWeatherGSNoLed: return "WeatherGS without the LED: AEF (classical top-hat) on every view, then 3DGS";
   }
   WGS_CHECK(false);
   return "";
@@ -47,6 +58,9 @@ Recipe recipe(Method m) {
       break;
     case Method::kGtMasks: r.masks = recon::TrainMasks::kAll; break;
     case Method::kAefTophat: r.particle_filter = true; break;
+    case Method::kWeatherGS: r.particle_filter = r.lens_detector = true; break;
+    case Method::kWeatherGSNoAef: r.lens_detector = true; break;
+    case Method::kWeatherGSNoLed: r.particle_filter = true; break;
   }
   return r;
 }

@@ -1,6 +1,7 @@
 // The reconstruction methods of the study, one recipe each (docs/study.md). A recipe says what a
 // method trains on: which images, which loss masks, which SfM points. Methods that need the
-// restoration part (the AEF and LED of WeatherGS) join here when restoration/ exists.
+// restoration part: the Atmospheric Effect Filter (today the classical top-hat filter: no learned AEF
+// exists yet) and the learned Lens Effect Detector.
 #pragma once
 
 #include <string>
@@ -16,6 +17,10 @@ enum class Method {
   kGtMasks,  // 3DGS on the weathered images with the generator's particle and lens masks excluded
   kAefTophat,  // the classical AEF (restoration/particle_filter.h) on every view, then 3DGS on the
                // filtered images: WeatherGS's first stage without learned weights and without the LED
+  kWeatherGS,       // AEF on every view -> LED on the filtered views, averaged over the training views ->
+                    // 3DGS on the filtered images with the LED mask excluded from the loss
+  kWeatherGSNoAef,  // ablation (the paper's Table III): LED on the raw views, 3DGS on the raw images, masked
+  kWeatherGSNoLed,  // ablation: AEF only (while the AEF is the classical one, the same recipe as aef-tophat)
 };
 const char* to_string(Method m);
 std::vector<Method> all_methods();
@@ -28,6 +33,8 @@ struct Recipe {
   recon::TrainMasks masks = recon::TrainMasks::kNone;
   bool clean_points = false;  // initialize from sparse_clean/0 (clean/ triangulated) instead of sparse/0
   bool particle_filter = false;  // train on the classical AEF's restored images (RUN/filtered/)
+  bool lens_detector = false;    // exclude the LED's mask (RUN/detected/) from the loss; the LED sees the
+                                 // filtered images when particle_filter, else the raw ones
 };
 Recipe recipe(Method m);
 

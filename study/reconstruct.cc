@@ -19,6 +19,7 @@ constexpr const char* kModelDir = "model";
 constexpr const char* kRendersDir = "renders/test";
 constexpr const char* kResultsFile = "results.json";
 constexpr const char* kFilteredDir = "filtered";
+constexpr const char* kDetectedDir = "detected";
 
 bool has_points(const std::string& model_dir) {
   const fs::path p = fs::path(model_dir) / "points3D.txt";
@@ -34,6 +35,10 @@ void ReconstructOptions::validate() const {
   if (random_init_count < 1) throw InputError("reconstruct options", "random_init_count must be >= 1");
   if (checkpoint_every < 0) throw InputError("reconstruct options", "checkpoint_every must be >= 0");
   colmap.validate();
+  led_mask.validate();
+  if (recipe(method).lens_detector && led_weights.empty())
+    throw InputError("reconstruct options", std::string("led_weights is empty: method ") + to_string(method) +
+                                                " needs the Lens Effect Detector's weights (--led-weights)");
 }
 
 ReconstructResult reconstruct(const ReconstructOptions& o, const recon::IterationCallback& on_iteration,
@@ -96,12 +101,23 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     restoration::filter_dataset(o.dataset, (run / kFilteredDir).string(), f);
   }
 
+  // 2b. The LED on the views 3DGS trains on, averaged over the training views.
+  if (r.lens_detector && !fs::exists(run / kDetectedDir / restoration::kDetectReportFile)) {
+    stage("detecting lens drops (LED, averaged over the training views)");
+    restoration::DetectDatasetOptions d;
+    d.weights = o.led_weights;
+    d.mask = o.led_mask;
+    if (r.particle_filter) d.images_dir = (run / kFilteredDir).string();
+    restoration::detect_dataset(o.dataset, (run / kDetectedDir).string(), d);
+  }
+
   // 3. Training (resumed when an earlier run of the same options stopped part way).
   recon::TrainRunOptions t;
   t.dataset = o.dataset;
   t.inputs.images = r.images;
   t.inputs.masks = r.masks;
   if (r.particle_filter) t.inputs.images_dir = (run / kFilteredDir).string();
+  if (r.lens_detector) t.inputs.masks_dir = (run / kDetectedDir).string();
   t.inputs.points_dir = points_dir;
   t.out = (run / kModelDir).string();
   t.checkpoint_every = o.checkpoint_every;

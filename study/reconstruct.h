@@ -2,7 +2,8 @@
 // none, training, test renders, evaluation against the clean ground truth.
 //
 // The run folder:
-//   filtered/           aef-tophat: the classical AEF's images of every view (+ masks/, filter.json)
+//   filtered/           the classical AEF's images of every view (+ masks/, filter.json)
+//   detected/           the LED's loss masks of every view (detect.json)
 //   sparse/0/           COLMAP points triangulated here when the dataset has none (the dataset itself
 //                       is never modified); logs/colmap/ its logs
 //   model/              the training run (reconstruction/run.h: run.json, point_cloud.ply, checkpoint)
@@ -17,6 +18,7 @@
 #include "datagen/colmap.h"
 #include "evaluator/evaluate.h"
 #include "reconstruction/run.h"
+#include "restoration/detect_dataset.h"
 #include "restoration/particle_filter.h"
 #include "study/method.h"
 
@@ -40,7 +42,9 @@ struct ReconstructOptions {
   PointsPolicy points = PointsPolicy::kAuto;
   datagen::ColmapOptions colmap;
   evaluator::ScoringOptions scoring;
-  restoration::ParticleFilterOptions particle_filter;  // aef-tophat
+  restoration::ParticleFilterOptions particle_filter;  // aef-tophat, weathergs, weathergs-no-led
+  std::string led_weights;  // weathergs, weathergs-no-aef: the LED weights stem (required for them)
+  restoration::LedMaskOptions led_mask;
 
   void validate() const;  // InputError naming the field
 };

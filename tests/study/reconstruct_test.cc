@@ -48,6 +48,7 @@ ReconstructOptions options(const std::string& data, const std::string& out, Meth
   o.checkpoint_every = 50;
   o.points = PointsPolicy::kDataset;  // no COLMAP: the random initialization (fast, deterministic)
   o.scoring.lpips = false;
+  o.led_weights = std::string(WEATHERGS_SOURCE_DIR) + "/models/led/led";  // the shipped weights
   return o;
 }
 
@@ -76,6 +77,14 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
       EXPECT_TRUE(fs::exists(out + "/filtered/filter.json"));
     } else {
       EXPECT_TRUE(run.at("images_dir").is_null());
+    }
+    if (rec.lens_detector) {  // the LED's mask (averaged over the training views) excluded from the loss
+      EXPECT_EQ(run.at("masks_dir").get<std::string>(), out + "/detected");
+      const Json d = read_json_file(out + "/detected/detect.json");
+      EXPECT_EQ(d.at("averaging"), "train-views");
+      EXPECT_EQ(d.at("images").get<std::string>().find(out + "/filtered") == 0, rec.particle_filter);
+    } else {
+      EXPECT_TRUE(run.at("masks_dir").is_null());
     }
     const Dataset ds = read_dataset(data);
     for (const std::string& v : ds.split("test")) EXPECT_TRUE(fs::exists(out + "/renders/test/" + v + ".png")) << v;

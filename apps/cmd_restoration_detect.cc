@@ -1,0 +1,66 @@
+// `weathergs detect`: the learned Lens Effect Detector over a dataset (docs/restoration.md).
+#include <cstdio>
+#include <memory>
+
+#include "apps/command.h"
+#include "apps/resources.h"
+#include "restoration/detect_dataset.h"
+
+namespace weathergs::cli {
+namespace {
+
+struct DetectArgs {
+  std::string data, out, images, weights, rule = "above";
+  double threshold = 0;
+  bool per_view = false;
+  std::vector<double> band{0.5, 0.7};
+  restoration::DetectDatasetOptions options;
+};
+
+int run(DetectArgs& a) {
+  a.options.weights = find_led_weights(a.weights);
+  a.options.images_dir = a.images;
+  a.options.averaging = a.per_view ? restoration::LedAveraging::kPerView : restoration::LedAveraging::kTrainViews;
+  a.options.mask.rule = a.rule == "band" ? restoration::LedThresholdRule::kBand : restoration::LedThresholdRule::kAbove;
+  if (a.threshold > 0) a.options.mask.threshold = a.threshold;
+  a.options.mask.band_lo = a.band[0];
+  a.options.mask.band_hi = a.band[1];
+  const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
+  double mean = 0;
+  for (const auto& v : r.views) mean += v.mask_fraction / double(r.views.size());
+  std::printf("detected lens drops on %zu views in %.2f s (%.1f ms per view in the network), %s, threshold %.3f: "
+              "%.1f%% of the pixels masked on average\nwrote %s\n",
+              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging), r.threshold,
+              100 * mean, a.out.c_str());
+  if (r.ground_truth)
+    std::printf("against the dataset's masks/lens: IoU %.3f  precision %.3f  recall %.3f (drops on %.2f%% of the pixels)\n",
+                r.ground_truth->iou, r.ground_truth->precision, r.ground_truth->recall, 100 * r.ground_truth->gt_fraction);
+  return kExitOk;
+}
+
+Command make(CLI::App& root) {
+  auto a = std::make_shared<DetectArgs>();
+  CLI::App* sub = root.add_subcommand(
+      "detect",
+      "Find the drops on the lens in every view of a dataset with the learned Lens Effect Detector and write "
+      "loss masks for 3DGS (255 = excluded; docs/restoration.md).");
+  sub->add_option("--data", a->data, "Dataset folder")->required();
+  sub->add_option("--out", a->out, "Output folder: <view>.png masks and detect.json")->required();
+  sub->add_option("--images", a->images, "Detect on these <view>.png instead of the dataset's images/ (e.g. `filter` output)");
+  sub->add_option("--weights", a->weights,
+                  "Weights stem (<stem>.json + <stem>.bin); default $WEATHERGS_LED_WEIGHTS, else the installed models/led/led");
+  sub->add_flag("--per-view", a->per_view,
+                "Each view's own attention (drops on a window, sliding drops) instead of the mean over the training views");
+  sub->add_option("--threshold", a->threshold, "Mask where the attention >= t (default: the weights' calibrated t)")
+      ->check(CLI::Range(0.0, 1.0));
+  sub->add_option("--rule", a->rule, "above: attention >= t (the paper); band: lo <= attention <= hi (the released code)")
+      ->capture_default_str()->check(CLI::IsMember({"above", "band"}));
+  sub->add_option("--band", a->band, "The band of --rule band")->expected(2)->capture_default_str();
+  sub->add_option("--dilate", a->options.mask.dilate_iterations, "3x3 dilations of the mask")->capture_default_str();
+  return {sub, [a] { return run(*a); }};
+}
+
+}  // namespace
+}  // namespace weathergs::cli
+
+WGS_REGISTER_COMMAND(detect, weathergs::cli::make)

@@ -1,0 +1,2 @@
+add_executable(bench_restoration ${CMAKE_CURRENT_LIST_DIR}/restoration_bench.cc)
+target_link_libraries(bench_restoration PRIVATE weathergs_restoration benchmark::benchmark)

@@ -1,0 +1,182 @@
+#include "restoration/detect_dataset.h"
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <opencv2/imgproc.hpp>
+#include <set>
+
+#include "core/atomic_file.h"
+#include "core/dataset.h"
+#include "core/error.h"
+#include "core/json_reader.h"
+#include "core/progress.h"
+
+namespace weathergs::restoration {
+
+namespace fs = std::filesystem;
+
+const char* to_string(LedAveraging a) { return a == LedAveraging::kPerView ? "per-view" : "train-views"; }
+const char* to_string(LedThresholdRule r) { return r == LedThresholdRule::kBand ? "band" : "above"; }
+
+void LedMaskOptions::validate() const {
+  if (threshold && !(*threshold > 0 && *threshold < 1))
+    throw InputError("LED threshold", "expected in (0, 1), got " + std::to_string(*threshold));
+  if (!(band_lo >= 0 && band_lo < band_hi && band_hi <= 1))
+    throw InputError("LED band", "expected 0 <= lo < hi <= 1, got [" + std::to_string(band_lo) + ", " + std::to_string(band_hi) + "]");
+  if (dilate_iterations < 0 || dilate_iterations > 50)
+    throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(dilate_iterations));
+}
+
+Image attention_to_mask(const Image& attention, double t, const LedMaskOptions& o) {
+  Image m(attention.width, attention.height, 1, ColorSpace::kLinear);
+  for (size_t i = 0; i < m.data.size(); ++i) {
+    const float a = attention.data[i];
+    const bool on = o.rule == LedThresholdRule::kBand ? (a >= o.band_lo && a <= o.band_hi) : a >= t;
+    m.data[i] = on ? 1.f : 0.f;
+  }
+  if (o.dilate_iterations > 0) {
+    cv::Mat mat(m.height, m.width, CV_32FC1, m.data.data());
+    cv::dilate(mat, mat, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)), cv::Point(-1, -1), o.dilate_iterations);
+  }
+  return m;
+}
+
+LedScore score_lens_masks(const std::string& name, const std::vector<Image>& predicted, const std::vector<Image>& truth) {
+  if (truth.empty() || (predicted.size() != 1 && predicted.size() != truth.size()))
+    throw InternalError("score_lens_masks: one prediction, or one per ground-truth mask");
+  double inter = 0, uni = 0, pred = 0, gt = 0;
+  for (size_t k = 0; k < truth.size(); ++k) {
+    const Image& g = truth[k];
+    const Image& m = predicted.size() == 1 ? predicted[0] : predicted[k];
+    WGS_CHECK_EQ(m.data.size(), g.data.size());
+    for (size_t i = 0; i < g.data.size(); ++i) {
+      const bool p = m.data[i] > 0.5f, q = g.data[i] > 0.5f;
+      inter += p && q, uni += p || q, pred += p, gt += q;
+    }
+  }
+  const double n = double(truth.size() * truth[0].data.size());
+  LedScore s;
+  s.dataset = name;
+  s.iou = uni > 0 ? inter / uni : 1.0;
+  s.precision = pred > 0 ? inter / pred : (gt > 0 ? 0.0 : 1.0);
+  s.recall = gt > 0 ? inter / gt : 1.0;
+  s.gt_fraction = gt / n;
+  s.mask_fraction = pred / n;
+  return s;
+}
+
+Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch) {
+  if (views.empty()) throw InputError(where, "no views to average");
+  Image sum(views[0].width, views[0].height, 1, ColorSpace::kLinear);
+  for (size_t b = 0; b < views.size(); b += size_t(batch)) {
+    const std::vector<Image> chunk(views.begin() + long(b), views.begin() + long(std::min(views.size(), b + size_t(batch))));
+    for (const Image& a : led.attention(chunk, where))  // in view order: a fixed summation order
+      for (size_t i = 0; i < sum.data.size(); ++i) sum.data[i] += a.data[i];
+  }
+  for (float& v : sum.data) v /= float(views.size());
+  return sum;
+}
+
+DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& o) {
+  o.mask.validate();
+  if (o.batch < 1 || o.batch > 64) throw InputError("detect batch", "expected 1..64, got " + std::to_string(o.batch));
+  const auto start = std::chrono::steady_clock::now();
+  const Dataset ds = read_dataset(dataset);
+  const LensDetector led = LensDetector::load(o.weights);
+  const double t = o.mask.threshold.value_or(led.threshold());
+  auto input_path = [&](const std::string& view) {
+    return o.images_dir.empty() ? ds.path(ImageKind::kImages, view) : (fs::path(o.images_dir) / (view + layout::kImageExt)).string();
+  };
+  for (const Camera& c : ds.cameras)
+    if (!fs::exists(input_path(c.name))) throw InputError(input_path(c.name), "missing: view " + c.name);
+  std::set<std::string> train;
+  if (o.averaging == LedAveraging::kTrainViews) {
+    const auto& names = ds.split("train");
+    train.insert(names.begin(), names.end());
+    if (train.empty()) throw InputError(ds.root, "has an empty train split: nothing to average the LED attention over");
+  }
+  // Attention of every view (per-view mode) or of the training views only (never the test views).
+  std::vector<std::string> names;
+  std::vector<Image> images;
+  for (const Camera& c : ds.cameras) {
+    if (o.averaging == LedAveraging::kTrainViews && !train.count(c.name)) continue;
+    Image img = read_image(input_path(c.name));
+    if (img.width != c.width || img.height != c.height)
+      throw InputError(input_path(c.name), "is " + img.to_string() + ", cameras.json says " + std::to_string(c.width) + "x" + std::to_string(c.height));
+    names.push_back(c.name);
+    images.push_back(std::move(img));
+  }
+  const auto net_start = std::chrono::steady_clock::now();
+  std::vector<Image> attention;
+  {
+    ProgressBar bar("detect lens drops", int64_t(images.size()));
+    for (size_t b = 0; b < images.size(); b += size_t(o.batch)) {
+      const std::vector<Image> chunk(images.begin() + long(b), images.begin() + long(std::min(images.size(), b + size_t(o.batch))));
+      for (Image& a : led.attention(chunk, ds.root)) attention.push_back(std::move(a));
+      bar.tick(int64_t(chunk.size()));
+    }
+  }
+  DetectDatasetReport report;
+  report.threshold = t;
+  report.seconds_per_view = seconds_since(net_start) / double(std::max<size_t>(1, images.size()));
+  Image averaged;
+  if (o.averaging == LedAveraging::kTrainViews) {
+    averaged = Image(attention[0].width, attention[0].height, 1, ColorSpace::kLinear);
+    for (const Image& a : attention)
+      for (size_t i = 0; i < a.data.size(); ++i) averaged.data[i] += a.data[i];
+    for (float& v : averaged.data) v /= float(attention.size());
+  }
+  AtomicDirectory dir(out);
+  Json views = Json::array();
+  std::vector<Image> scored_masks, scored_truth;  // ground truth: the averaged (or every) view
+  const std::set<std::string> averaged_set(names.begin(), names.end());
+  size_t k = 0;
+  for (const Camera& c : ds.cameras) {
+    const bool own = o.averaging == LedAveraging::kPerView;
+    const Image& a = own ? attention[k] : averaged;
+    if (own) ++k;
+    if (a.width != c.width || a.height != c.height)
+      throw InputError(input_path(c.name), "differs in size from the training views; kTrainViews averaging needs one size");
+    const Image mask = attention_to_mask(a, t, o.mask);
+    double frac = 0, mean = 0;
+    for (size_t i = 0; i < mask.data.size(); ++i) frac += mask.data[i], mean += a.data[i];
+    DetectViewReport v{c.name, frac / double(mask.data.size()), mean / double(mask.data.size())};
+    write_mask((fs::path(dir.path()) / (c.name + layout::kImageExt)).string(), mask);
+    if (ds.has(ImageKind::kLensMask) && averaged_set.count(c.name) && fs::exists(ds.path(ImageKind::kLensMask, c.name))) {
+      scored_truth.push_back(read_mask(ds.path(ImageKind::kLensMask, c.name)));
+      scored_masks.push_back(mask);
+    }
+    views.push_back({{"view", v.view}, {"mask_fraction", v.mask_fraction}, {"mean_attention", v.mean_attention}});
+    report.views.push_back(v);
+  }
+  Json gt_json;
+  if (!scored_truth.empty() && scored_truth.size() == averaged_set.size()) {
+    report.ground_truth = score_lens_masks(ds.info.name, scored_masks, scored_truth);
+    const LedScore& g = *report.ground_truth;
+    gt_json = {{"masks", layout::kLensMaskDir}, {"views", scored_truth.size()}, {"iou", g.iou}, {"precision", g.precision},
+               {"recall", g.recall}, {"gt_fraction", g.gt_fraction}, {"mask_fraction", g.mask_fraction}};
+  }
+  report.seconds = seconds_since(start);
+  const Json j{{"format", "weathergs-detect"},
+               {"version", 1},
+               {"dataset", fs::absolute(dataset).lexically_normal().string()},
+               {"images", o.images_dir.empty() ? std::string(layout::kImagesDir) : fs::absolute(o.images_dir).lexically_normal().string()},
+               {"weights", fs::absolute(o.weights + ".json").lexically_normal().string()},
+               {"weights_sha256", led.metadata().value("weights_sha256", "")},
+               {"averaging", to_string(o.averaging)},
+               {"averaged_views", o.averaging == LedAveraging::kTrainViews ? Json(names) : Json()},
+               {"rule", to_string(o.mask.rule)},
+               {"threshold", o.mask.rule == LedThresholdRule::kAbove ? Json(t) : Json()},
+               {"band", o.mask.rule == LedThresholdRule::kBand ? Json{o.mask.band_lo, o.mask.band_hi} : Json()},
+               {"dilate_iterations", o.mask.dilate_iterations},
+               {"ground_truth", gt_json},
+               {"seconds", report.seconds},
+               {"seconds_per_view", report.seconds_per_view},
+               {"views", views}};
+  write_file_atomic((fs::path(dir.path()) / kDetectReportFile).string(), j.dump(2) + "\n");
+  dir.commit();
+  return report;
+}
+
+}  // namespace weathergs::restoration

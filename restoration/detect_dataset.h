@@ -1,0 +1,78 @@
+// `weathergs detect`: the learned Lens Effect Detector over the views of a dataset, turned into loss
+// masks for 3DGS (docs/restoration.md). libtorch-free: the network is behind restoration/lens_detector.h.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+#include "restoration/lens_detector.h"
+
+namespace weathergs::restoration {
+
+inline constexpr const char* kDetectReportFile = "detect.json";  // written last: the output is complete
+// The weights shipped with the repository (models/README.md), relative to the source tree.
+inline constexpr const char* kDefaultLedWeights = "models/led/led";
+
+// kTrainViews: one mask from the attention averaged over the training views only (the paper's
+// "enhanced with averaging", for drops fixed to the lens), written for every view. kPerView: each
+// view's own attention (drops on a window, or sliding).
+enum class LedAveraging { kTrainViews, kPerView };
+const char* to_string(LedAveraging a);
+
+// How the averaged attention becomes a mask. kAbove: m >= t (the paper's M = 1(C >= t)). kBand: the
+// released code's interactive band lo <= m <= hi, default [0.5, 0.7] (a named preset, not our default).
+enum class LedThresholdRule { kAbove, kBand };
+const char* to_string(LedThresholdRule r);
+
+struct LedMaskOptions {
+  LedThresholdRule rule = LedThresholdRule::kAbove;
+  std::optional<double> threshold;   // kAbove; default: the weights' calibrated threshold
+  double band_lo = 0.5, band_hi = 0.7;  // kBand
+  int dilate_iterations = 3;         // 3x3 dilation, as the released code
+  void validate() const;
+};
+
+// Attention -> {0, 1} mask with `t` (resolved threshold) and the rule, then dilated.
+Image attention_to_mask(const Image& attention, double t, const LedMaskOptions& options);
+
+// A predicted mask against ground-truth lens masks, pixel counts summed over the views (one IoU for
+// the set). A set without drops and without a prediction scores IoU 1.
+struct LedScore {
+  std::string dataset;
+  double iou = 0, precision = 0, recall = 0;
+  double gt_fraction = 0, mask_fraction = 0;  // of the pixels, over the views
+};
+LedScore score_lens_masks(const std::string& name, const std::vector<Image>& predicted, const std::vector<Image>& truth);
+
+struct DetectDatasetOptions {
+  std::string weights = kDefaultLedWeights;  // stem of <stem>.json + <stem>.bin
+  std::string images_dir;  // detect on these <view>.png instead of the dataset's images/ (e.g. AEF output)
+  LedAveraging averaging = LedAveraging::kTrainViews;
+  LedMaskOptions mask;
+  int batch = 4;           // views per network call
+};
+
+struct DetectViewReport {
+  std::string view;
+  double mask_fraction = 0;
+  double mean_attention = 0;
+};
+struct DetectDatasetReport {
+  std::vector<DetectViewReport> views;  // dataset order
+  double threshold = 0;
+  double seconds = 0;
+  double seconds_per_view = 0;          // network time only
+  std::optional<LedScore> ground_truth; // when the dataset has masks/lens: over the averaged views
+                                        // (train views), or every view with per-view averaging
+};
+
+// Writes <out>/<view>.png for every view (255 = excluded from the loss, the dataset's mask convention)
+// and detect.json last, atomically. InputError names the dataset, view, weights or option.
+DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& options);
+
+// The mean attention of `views` (sRGB images of one size): the averaging step on its own (calibration).
+Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch = 4);
+
+}  // namespace weathergs::restoration

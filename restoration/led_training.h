@@ -1,0 +1,46 @@
+// Training and calibration of the Lens Effect Detector on generated datasets (docs/restoration.md,
+// `weathergs train-led`, `make models`). libtorch-free.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "restoration/detect_dataset.h"
+#include "restoration/lens_detector.h"
+
+namespace weathergs::restoration {
+
+// Every view of a dataset as (images/<view>.png, masks/lens/<view>.png); a dataset without masks/lens
+// has no drops: its masks are zero.
+std::vector<LedExample> read_led_examples(const std::string& dataset);
+
+// The attention averaged over the train views of `dataset`, thresholded at `t` with `mask_options`,
+// against each train view's masks/lens (pixel counts summed over views: one IoU per dataset).
+LedScore score_led(const LensDetector& led, const std::string& dataset, double t, const LedMaskOptions& mask_options);
+
+struct LedCalibration {
+  double threshold = 0.5;
+  double mean_iou = 0;                  // over the held-out datasets with drops
+  std::vector<LedScore> scores;         // at the chosen threshold
+};
+// Picks t on a grid 0.05..0.95 (step 0.025) maximizing the mean IoU over held-out datasets that have
+// drops (datasets without drops only enter through precision: a false mask there lowers nothing in
+// IoU, so they are reported, not optimized).
+LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mask_options);
+
+struct TrainLedOptions {
+  LedTrainOptions train;
+  LedMaskOptions mask;  // the post-processing the calibration assumes (threshold is ignored)
+  std::string command;  // the command line, recorded in the manifest
+};
+struct TrainLedResult {
+  LedTrainRecord record;
+  LedCalibration calibration;
+  size_t examples = 0;
+};
+// Trains on every view of `train_datasets`, calibrates on `held_out`, writes <out_stem>.json/.bin
+// (with the training record, the datasets, the calibration and the command).
+TrainLedResult train_led(const std::vector<std::string>& train_datasets, const std::vector<std::string>& held_out,
+                         const std::string& out_stem, const TrainLedOptions& options);
+
+}  // namespace weathergs::restoration

@@ -1,0 +1,378 @@
+// The only translation unit of the LED that includes libtorch (~17 s to compile).
+#include "restoration/lens_detector.h"
+
+#include <torch/torch.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/parallel.h"
+#include "core/progress.h"
+#include "core/rng.h"
+#include "core/sha256.h"
+
+namespace weathergs::restoration {
+
+namespace fs = std::filesystem;
+namespace nn = torch::nn;
+namespace F = torch::nn::functional;
+
+namespace {
+
+constexpr uint64_t kStreamLedBatch = 0x4c4544424154ull;  // "LEDBAT": which examples, flips
+
+struct ResidualBlockImpl : nn::Module {
+  nn::Conv2d c1{nullptr}, c2{nullptr};
+  ResidualBlockImpl(int ch, int dilation) {
+    c1 = register_module("c1", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
+    c2 = register_module("c2", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
+  }
+  torch::Tensor forward(const torch::Tensor& x) { return torch::relu(x + c2(torch::relu(c1(x)))); }
+};
+TORCH_MODULE(ResidualBlock);
+
+constexpr int kInputChannels = 4;  // RGB + sharpness (to_tensor)
+
+// One recurrent step: cat(RGB, sharpness, A_{t-1}) -> conv (full res) -> strided conv -> residual blocks ->
+// ConvLSTM -> upsample -> conv over cat(state, full-res features) -> sigmoid.
+struct LedNetImpl : nn::Module {
+  LedArchitecture arch;
+  nn::Conv2d in{nullptr}, down{nullptr}, lstm{nullptr}, out{nullptr};
+  nn::ModuleList blocks;
+
+  explicit LedNetImpl(const LedArchitecture& a) : arch(a) {
+    const int ch = a.channels;
+    in = register_module("in", nn::Conv2d(nn::Conv2dOptions(kInputChannels + 1, ch, 3).padding(1)));
+    down = register_module("down", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(1).stride(2)));
+    blocks = register_module("blocks", nn::ModuleList());
+    for (int b = 0; b < a.residual_blocks; ++b) blocks->push_back(ResidualBlock(ch, 1 << b));
+    lstm = register_module("lstm", nn::Conv2d(nn::Conv2dOptions(2 * ch, 4 * ch, 3).padding(1)));
+    out = register_module("out", nn::Conv2d(nn::Conv2dOptions(2 * ch, 1, 3).padding(1)));
+    // Prior: drops cover a small part of a view. Starting the output at sigmoid(-2) ~ 0.12 (RetinaNet's
+    // prior initialization) keeps training from first collapsing to "no drop anywhere".
+    torch::NoGradGuard no_grad;
+    out->bias.fill_(-2.0);
+  }
+
+  // x: [B, 4, H, W] in [0, 1]. Returns the N attention maps [B, 1, H, W].
+  std::vector<torch::Tensor> forward(const torch::Tensor& x) {
+    const int64_t B = x.size(0), H = x.size(2), W = x.size(3);
+    torch::Tensor att = torch::full({B, 1, H, W}, 0.5f);
+    torch::Tensor h, c;
+    std::vector<torch::Tensor> maps;
+    for (int t = 0; t < arch.steps; ++t) {
+      const torch::Tensor full = torch::relu(in(torch::cat({x, att}, 1)));
+      torch::Tensor f = torch::relu(down(full));
+      for (const auto& b : *blocks) f = b->as<ResidualBlock>()->forward(f);
+      if (t == 0) {
+        h = torch::zeros_like(f);
+        c = torch::zeros_like(f);
+      }
+      const std::vector<torch::Tensor> g = lstm(torch::cat({f, h}, 1)).chunk(4, 1);
+      c = torch::sigmoid(g[1]) * c + torch::sigmoid(g[0]) * torch::tanh(g[2]);
+      h = torch::sigmoid(g[3]) * torch::tanh(c);
+      const torch::Tensor up =
+          F::interpolate(h, F::InterpolateFuncOptions().size(std::vector<int64_t>{H, W}).mode(torch::kBilinear).align_corners(false));
+      att = torch::sigmoid(out(torch::cat({up, full}, 1)));
+      maps.push_back(att);
+    }
+    return maps;
+  }
+};
+TORCH_MODULE(LedNet);
+
+int internal_height(const LedArchitecture& a, int width, int height) {
+  return std::max(8, int(std::lround(double(a.width) * height / width)));
+}
+
+// sRGB image (3 or 4 channels) -> [4, h, w] float tensor at the internal size: RGB by area resampling,
+// and a sharpness channel, the mean |Laplacian| of the luminance taken at the full resolution and then
+// area-averaged. A defocused drop is above all a region without fine texture; that cue lives in the
+// frequencies the downsampling removes, so it is measured before (issue 11 allows reduced resolution
+// inside the network; this keeps what the drop looks like at full resolution).
+torch::Tensor to_tensor(const Image& img, int w, int h, const std::string& where) {
+  if (img.empty() || img.channels < 3)
+    throw InputError(where, "expected an RGB image (3 or 4 channels), got " + img.to_string());
+  require_finite(img, where);
+  cv::Mat m(img.height, img.width, CV_32FC(img.channels), const_cast<float*>(img.data.data()));
+  cv::Mat rgb;
+  if (img.channels == 4) cv::cvtColor(m, rgb, cv::COLOR_RGBA2RGB); else rgb = m;
+  cv::Mat grey, lap, small_rgb, small_sharp;
+  cv::cvtColor(rgb, grey, cv::COLOR_RGB2GRAY);
+  cv::Laplacian(grey, lap, CV_32F, 1, 1.0, 0.0, cv::BORDER_REFLECT);
+  lap = cv::abs(lap);
+  cv::resize(rgb, small_rgb, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  cv::resize(lap, small_sharp, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  torch::Tensor t = torch::empty({4, h, w}, torch::kFloat32);
+  const torch::Tensor c = torch::from_blob(small_rgb.ptr<float>(), {h, w, 3}, torch::kFloat32).permute({2, 0, 1});
+  t.slice(0, 0, 3).copy_(c);
+  // kSharpnessGain maps a typical textured region (mean |Laplacian| ~ 0.05-0.1) to ~0.5-1.
+  constexpr float kSharpnessGain = 8.f;
+  t[3].copy_(torch::from_blob(small_sharp.ptr<float>(), {h, w}, torch::kFloat32) * kSharpnessGain);
+  return t.clamp(0.f, 1.f).contiguous();
+}
+
+torch::Tensor mask_to_tensor(const Image& mask, int w, int h) {
+  cv::Mat m(mask.height, mask.width, CV_32FC1, const_cast<float*>(mask.data.data()));
+  cv::Mat small;
+  cv::resize(m, small, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+  return torch::from_blob(small.ptr<float>(), {1, h, w}, torch::kFloat32).clone().clamp(0.f, 1.f);
+}
+
+torch::Tensor attention_loss(const std::vector<torch::Tensor>& maps, const torch::Tensor& target, double theta) {
+  torch::Tensor loss = torch::zeros({});
+  const int n = int(maps.size());
+  for (int t = 0; t < n; ++t) loss = loss + std::pow(theta, n - 1 - t) * F::mse_loss(maps[size_t(t)], target);
+  return loss;
+}
+
+std::string shape_string(const std::vector<int64_t>& s) {
+  std::string out = "[";
+  for (size_t i = 0; i < s.size(); ++i) out += (i ? ", " : "") + std::to_string(s[i]);
+  return out + "]";
+}
+
+}  // namespace
+
+void LedArchitecture::validate() const {
+  if (steps < 1 || steps > 16) throw InputError("LED architecture steps", "expected 1..16, got " + std::to_string(steps));
+  if (width < 16 || width > 2048) throw InputError("LED architecture width", "expected 16..2048 px, got " + std::to_string(width));
+  if (channels < 1 || channels > 256) throw InputError("LED architecture channels", "expected 1..256, got " + std::to_string(channels));
+  if (residual_blocks < 0 || residual_blocks > 8)
+    throw InputError("LED architecture residual_blocks", "expected 0..8, got " + std::to_string(residual_blocks));
+}
+
+Json LedArchitecture::to_json() const {
+  return {{"steps", steps}, {"width", width}, {"channels", channels}, {"residual_blocks", residual_blocks}};
+}
+
+LedArchitecture LedArchitecture::from_json(const JsonReader& r) {
+  LedArchitecture a;
+  a.steps = r.get<int>("steps");
+  a.width = r.get<int>("width");
+  a.channels = r.get<int>("channels");
+  a.residual_blocks = r.get<int>("residual_blocks");
+  r.finish();
+  a.validate();
+  return a;
+}
+
+void LedTrainOptions::validate() const {
+  arch.validate();
+  if (iterations < 1) throw InputError("LED training iterations", "expected at least 1, got " + std::to_string(iterations));
+  if (batch < 1 || batch > 256) throw InputError("LED training batch", "expected 1..256, got " + std::to_string(batch));
+  if (!(learning_rate > 0 && learning_rate < 1))
+    throw InputError("LED training learning_rate", "expected in (0, 1), got " + std::to_string(learning_rate));
+  if (!(theta > 0 && theta <= 1)) throw InputError("LED training theta", "expected in (0, 1], got " + std::to_string(theta));
+  if (threads < 0) throw InputError("LED training threads", "expected >= 0, got " + std::to_string(threads));
+}
+
+struct LensDetector::Impl {
+  LedArchitecture arch;
+  LedNet net{nullptr};
+  double threshold = 0.5;
+  Json metadata = Json::object();
+};
+
+LensDetector::LensDetector(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+LensDetector::~LensDetector() = default;
+LensDetector::LensDetector(LensDetector&&) noexcept = default;
+LensDetector& LensDetector::operator=(LensDetector&&) noexcept = default;
+
+LensDetector::LensDetector(const LedArchitecture& arch, uint64_t seed) : impl_(std::make_unique<Impl>()) {
+  arch.validate();
+  impl_->arch = arch;
+  torch::manual_seed(seed);  // libtorch's default initializers draw from the global CPU generator
+  impl_->net = LedNet(arch);
+  impl_->net->eval();
+}
+
+const LedArchitecture& LensDetector::architecture() const { return impl_->arch; }
+double LensDetector::threshold() const { return impl_->threshold; }
+void LensDetector::set_threshold(double t) {
+  if (!(t > 0 && t < 1)) throw InputError("LED threshold", "expected in (0, 1), got " + std::to_string(t));
+  impl_->threshold = t;
+}
+const Json& LensDetector::metadata() const { return impl_->metadata; }
+
+int64_t LensDetector::parameter_count() const {
+  int64_t n = 0;
+  for (const auto& p : impl_->net->parameters()) n += p.numel();
+  return n;
+}
+
+void LensDetector::save(const std::string& stem, const Json& extra) const {
+  std::string blob;
+  Json table = Json::array();
+  for (const auto& p : impl_->net->named_parameters()) {
+    const torch::Tensor t = p.value().detach().contiguous().to(torch::kFloat32);
+    table.push_back({{"name", p.key()}, {"shape", t.sizes().vec()}});
+    blob.append(reinterpret_cast<const char*>(t.data_ptr<float>()), size_t(t.numel()) * sizeof(float));
+  }
+  Json j = extra.is_object() ? extra : Json::object();
+  j["format"] = kLedFormat;
+  j["version"] = kLedFormatVersion;
+  j["architecture"] = impl_->arch.to_json();
+  j["threshold"] = impl_->threshold;
+  j["parameters"] = parameter_count();
+  j["tensors"] = table;
+  j["weights_file"] = fs::path(stem + ".bin").filename().string();
+  j["weights_sha256"] = sha256_hex(blob);
+  write_file_atomic(stem + ".bin", blob);
+  write_file_atomic(stem + ".json", j.dump(2) + "\n");
+}
+
+LensDetector LensDetector::load(const std::string& stem) {
+  const std::string json_path = stem + ".json", bin_path = stem + ".bin";
+  const std::string fix = "; retrain with `make models` or restore the file from the repository (models/README.md)";
+  if (!fs::exists(json_path)) throw InputError(json_path, "missing: no LED weights manifest" + fix);
+  const JsonReader r = JsonReader::from_file(json_path);
+  const std::string format = r.get_or<std::string>("format", "");
+  if (format != kLedFormat) throw InputError(r.where("format"), "expected \"" + std::string(kLedFormat) + "\" (LED weights), got \"" + format + "\"" + fix);
+  const int version = r.get<int>("version");
+  if (version != kLedFormatVersion)
+    throw InputError(r.where("version"), "expected LED weights version " + std::to_string(kLedFormatVersion) + ", got " +
+                                             std::to_string(version) + fix);
+  const LedArchitecture arch = LedArchitecture::from_json(r.child("architecture"));
+  if (!fs::exists(bin_path)) throw InputError(bin_path, "missing: the LED weights blob" + fix);
+  std::ifstream in(bin_path, std::ios::binary);
+  const std::string blob((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (sha256_hex(blob) != r.get<std::string>("weights_sha256"))
+    throw InputError(bin_path, "corrupt: its sha256 differs from " + json_path + fix);
+  LensDetector d(arch, 0);
+  const auto params = d.impl_->net->named_parameters();
+  const JsonReader table = r.child("tensors");
+  if (table.size() != params.size())
+    throw InputError(table.where(), "expected " + std::to_string(params.size()) + " tensors for this architecture, got " +
+                                        std::to_string(table.size()) + fix);
+  size_t offset = 0;
+  torch::NoGradGuard no_grad;
+  for (size_t i = 0; i < params.size(); ++i) {
+    const JsonReader e = table.at(i);
+    const auto& p = params[i];
+    const std::string name = e.get<std::string>("name");
+    const std::vector<int64_t> shape = e.get<std::vector<int64_t>>("shape");
+    if (name != p.key() || shape != p.value().sizes().vec())
+      throw InputError(e.where(), "expected tensor \"" + p.key() + "\" of shape " + shape_string(p.value().sizes().vec()) +
+                                      " (this build's architecture), got \"" + name + "\" of shape " + shape_string(shape) +
+                                      ": the weights are for another version of the network" + fix);
+    const size_t bytes = size_t(p.value().numel()) * sizeof(float);
+    if (offset + bytes > blob.size()) throw InputError(bin_path, "truncated: shorter than its tensor table" + fix);
+    std::memcpy(p.value().data_ptr<float>(), blob.data() + offset, bytes);
+    offset += bytes;
+  }
+  if (offset != blob.size()) throw InputError(bin_path, "longer than its tensor table" + fix);
+  const double t = r.get_number("threshold", 1e-6, 1 - 1e-6);
+  d.impl_->threshold = t;
+  d.impl_->metadata = r.value();
+  return d;
+}
+
+LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, const LedTrainOptions& o) {
+  o.validate();
+  if (examples.empty()) throw InputError("LED training set", "is empty");
+  const auto start = std::chrono::steady_clock::now();
+  torch::set_num_threads(o.threads > 0 ? o.threads : num_threads());
+  const int W = impl_->arch.width;
+  const int H = internal_height(impl_->arch, examples[0].image.width, examples[0].image.height);
+  std::vector<torch::Tensor> xs, ms;
+  for (size_t i = 0; i < examples.size(); ++i) {
+    const LedExample& e = examples[i];
+    const std::string where = "LED training example " + std::to_string(i);
+    if (e.mask.channels != 1 || e.mask.width != e.image.width || e.mask.height != e.image.height)
+      throw InputError(where, "mask " + e.mask.to_string() + " does not match image " + e.image.to_string());
+    if (internal_height(impl_->arch, e.image.width, e.image.height) != H)
+      throw InputError(where, "has another aspect ratio than the first example (" + e.image.to_string() + ")");
+    xs.push_back(to_tensor(e.image, W, H, where));
+    ms.push_back(mask_to_tensor(e.mask, W, H));
+  }
+  LedNet& net = impl_->net;
+  net->train();
+  torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(o.learning_rate));
+  LedTrainRecord rec;
+  rec.parameters = parameter_count();
+  ProgressBar bar("train LED", o.iterations);
+  double window = 0;
+  for (int it = 0; it < o.iterations; ++it) {
+    // Batch and flips keyed on (seed, iteration): the same run whatever the thread count.
+    Rng rng(o.seed, kStreamLedBatch, uint64_t(it));
+    std::vector<torch::Tensor> bx, bm;
+    for (int b = 0; b < o.batch; ++b) {
+      const size_t k = rng.uniform_int(uint32_t(xs.size()));
+      const bool flip = rng.uniform() < 0.5f;
+      bx.push_back(flip ? xs[k].flip({2}) : xs[k]);
+      bm.push_back(flip ? ms[k].flip({2}) : ms[k]);
+    }
+    const double lr = o.learning_rate * (0.05 + 0.95 * 0.5 * (1 + std::cos(M_PI * it / o.iterations)));
+    for (auto& g : adam.param_groups()) static_cast<torch::optim::AdamOptions&>(g.options()).lr(lr);
+    adam.zero_grad();
+    const torch::Tensor loss = attention_loss(net->forward(torch::stack(bx)), torch::stack(bm), o.theta);
+    loss.backward();
+    adam.step();
+    const double l = loss.item<double>();
+    if (!std::isfinite(l)) throw NumericalDivergence("LED training loss became non-finite at iteration " + std::to_string(it) + " (lower --learning-rate)");
+    window += l;
+    if ((it + 1) % 50 == 0 || it + 1 == o.iterations) {
+      rec.loss_curve.push_back(window / ((it % 50) + 1));
+      window = 0;
+    }
+    if (o.progress) bar.tick();
+  }
+  net->eval();
+  rec.seconds = seconds_since(start);
+  return rec;
+}
+
+std::vector<Image> LensDetector::attention(const std::vector<Image>& images, const std::string& where) const {
+  if (images.empty()) return {};
+  const int iw = images[0].width, ih = images[0].height;
+  const int W = impl_->arch.width, H = internal_height(impl_->arch, iw, ih);
+  std::vector<torch::Tensor> xs;
+  for (const Image& img : images) {
+    if (img.width != iw || img.height != ih)
+      throw InputError(where, "images of one batch differ in size (" + img.to_string() + " vs " + images[0].to_string() + ")");
+    xs.push_back(to_tensor(img, W, H, where));
+  }
+  torch::set_num_threads(num_threads());  // the process-wide cap (weathergs --threads)
+  torch::NoGradGuard no_grad;
+  const std::vector<torch::Tensor> maps = impl_->net->forward(torch::stack(xs));
+  torch::Tensor mean = maps[0];
+  for (size_t t = 1; t < maps.size(); ++t) mean = mean + maps[t];
+  mean = (mean / double(maps.size())).contiguous();
+  std::vector<Image> out;
+  for (size_t i = 0; i < images.size(); ++i) {
+    const torch::Tensor a = mean[int64_t(i)][0].contiguous();
+    cv::Mat small(H, W, CV_32FC1, a.data_ptr<float>());
+    cv::Mat big;
+    cv::resize(small, big, cv::Size(iw, ih), 0, 0, cv::INTER_LINEAR);
+    Image m(iw, ih, 1, ColorSpace::kLinear);
+    std::memcpy(m.data.data(), big.ptr<float>(), m.data.size() * sizeof(float));
+    for (float& v : m.data) v = std::clamp(v, 0.f, 1.f);
+    out.push_back(std::move(m));
+  }
+  return out;
+}
+
+Image LensDetector::attention(const Image& image, const std::string& where) const {
+  return attention(std::vector<Image>{image}, where).front();
+}
+
+double LensDetector::loss(const std::vector<LedExample>& examples, double theta) const {
+  if (examples.empty()) throw InputError("LED loss", "no examples");
+  const int W = impl_->arch.width, H = internal_height(impl_->arch, examples[0].image.width, examples[0].image.height);
+  std::vector<torch::Tensor> bx, bm;
+  for (const LedExample& e : examples) {
+    bx.push_back(to_tensor(e.image, W, H, "LED loss"));
+    bm.push_back(mask_to_tensor(e.mask, W, H));
+  }
+  torch::NoGradGuard no_grad;
+  return attention_loss(impl_->net->forward(torch::stack(bx)), torch::stack(bm), theta).item<double>();
+}
+
+}  // namespace weathergs::restoration

@@ -1,0 +1,98 @@
+// The learned Lens Effect Detector (LED) of WeatherGS (docs/restoration.md): the attentive-recurrent
+// network of AttentiveGAN (Qian et al., CVPR 2018), shrunk to run on 2 CPU cores. Each of N recurrent
+// steps takes cat(RGB, sharpness, previous attention), runs a strided conv, dilated residual blocks and a ConvLSTM,
+// and emits a 1-channel sigmoid attention map; the first attention is 0.5. Trained on the generator's
+// lens masks with the loss sum_t theta^(N-t) * MSE(A_t, M), theta = 0.8 (the paper's values).
+//
+// This header is free of libtorch: only lens_detector.cc includes <torch/torch.h>. Weights live in
+// two files, `<stem>.json` (architecture, parameter table, calibrated threshold, sha256 of the blob,
+// training record) and `<stem>.bin` (little-endian float32 parameters in table order).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/image.h"
+#include "core/json_reader.h"
+
+namespace weathergs::restoration {
+
+inline constexpr const char* kLedFormat = "weathergs-led";
+inline constexpr int kLedFormatVersion = 1;
+
+struct LedArchitecture {
+  int steps = 4;           // recurrent steps (the paper's N)
+  int width = 96;          // internal width in pixels; the height follows the view's aspect ratio
+  int channels = 16;       // feature channels after the strided conv (and of the ConvLSTM state)
+  int residual_blocks = 3; // dilations 1, 2, 4, ... (the receptive field must cover a defocused drop)
+  void validate() const;   // InputError naming the field
+  Json to_json() const;
+  static LedArchitecture from_json(const JsonReader& r);
+};
+
+struct LedTrainOptions {
+  LedArchitecture arch;
+  int iterations = 3000;
+  int batch = 4;
+  double learning_rate = 2e-3;  // Adam; cosine-decayed to 5% over the run
+  double theta = 0.8;           // weight of step t is theta^(N-t)
+  uint64_t seed = 1;
+  int threads = 0;              // 0 = all cores (libtorch intra-op threads)
+  bool progress = true;
+  void validate() const;
+};
+
+// One training example: an sRGB view (3 channels) and its lens mask (1 channel, 1 = drop), same size.
+struct LedExample {
+  Image image;
+  Image mask;
+};
+
+struct LedTrainRecord {
+  std::vector<double> loss_curve;  // mean loss per 50 iterations
+  double seconds = 0;
+  int64_t parameters = 0;
+};
+
+class LensDetector {
+ public:
+  // A freshly initialized network (weights from `seed`).
+  LensDetector(const LedArchitecture& arch, uint64_t seed);
+  ~LensDetector();
+  LensDetector(LensDetector&&) noexcept;
+  LensDetector& operator=(LensDetector&&) noexcept;
+
+  // Reads `<stem>.json` + `<stem>.bin`. InputError naming the file and the fix when either is missing,
+  // corrupt (sha256), of another format or version, or its table does not match the architecture.
+  static LensDetector load(const std::string& stem);
+  // Writes both files atomically; `extra` (training record, calibration, ...) is merged into the JSON.
+  void save(const std::string& stem, const Json& extra) const;
+
+  const LedArchitecture& architecture() const;
+  int64_t parameter_count() const;
+  // The calibrated threshold stored with the weights (0.5 until calibrated).
+  double threshold() const;
+  void set_threshold(double t);
+  const Json& metadata() const;  // the JSON read by load (empty for a fresh network)
+
+  // Trains in place on `examples` (resized to the internal width once, up front). Deterministic for a
+  // given seed and thread count.
+  LedTrainRecord train(const std::vector<LedExample>& examples, const LedTrainOptions& options);
+
+  // The mean of the N attention maps, bilinearly resized to the image's size, in [0, 1]. `image`:
+  // sRGB, 3 or 4 channels (alpha ignored); `where` names it in errors. Identical with 1 or 2 threads.
+  Image attention(const Image& image, const std::string& where) const;
+  // Attention for several images at once (same size), one batch: faster than one by one.
+  std::vector<Image> attention(const std::vector<Image>& images, const std::string& where) const;
+
+  // The training loss of one batch (no update): tests check it decreases.
+  double loss(const std::vector<LedExample>& examples, double theta) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  explicit LensDetector(std::unique_ptr<Impl> impl);
+};
+
+}  // namespace weathergs::restoration

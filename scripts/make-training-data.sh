@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# Builds the restoration training set (docs/restoration.md, `make training-data`): the four training
+# scenes of scenes/training/ (never tanabata, factory or pool) rendered clear once at the quick profile,
+# then re-weathered with WEATHERS specs each. The specs are a fixed table walked by the index k, so the
+# set is deterministic from its seeds (weather seed = 1000 * scene index + k). Existing outputs are kept
+# (the set is a cache: delete OUT to rebuild). Prints its size and time; writes OUT/manifest.json.
+#
+#   scripts/make-training-data.sh BUILD/apps/weathergs OUT [WEATHERS=12] [PROFILE=quick]
+set -euo pipefail
+BIN=${1:?usage: make-training-data.sh WEATHERGS_BINARY OUT [WEATHERS] [PROFILE]}
+OUT=${2:?usage: make-training-data.sh WEATHERGS_BINARY OUT [WEATHERS] [PROFILE]}
+WEATHERS=${3:-12}
+PROFILE=${4:-quick}
+HERE=$(cd "$(dirname "$0")/.." && pwd)
+SCENES=(park parking_lot harbour market)
+mkdir -p "$OUT/clear" "$OUT/specs"
+start=$(date +%s)
+
+# The weather table: effect mix, named intensity, style, wind, lens drops (count, radius, attach, slide).
+EFFECTS=(rain snow rain snow none rain+fog snow+fog rain snow rain snow none)
+INTENSITIES=(light moderate heavy violent)
+STYLES=(paper physical paper)
+DROPS=(0 20 40 80 10 60 30 0 50 15 70 25)
+
+spec_for() {  # scene_index k -> JSON on stdout
+  local si=$1 k=$2
+  local effect=${EFFECTS[$((k % ${#EFFECTS[@]}))]}
+  local intensity=${INTENSITIES[$(((k + si) % 4))]}
+  local style=${STYLES[$(((k + 2 * si) % 3))]}
+  local drops=${DROPS[$(((k + 3 * si) % ${#DROPS[@]}))]}
+  local wind=$(((k * 7 + si * 3) % 5 - 2))
+  local slide=0
+  if [ $(((k + si) % 5)) -eq 4 ]; then slide=4; fi
+  local fx=""
+  case $effect in
+    rain) fx="\"rain\": {\"intensity\": \"$intensity\", \"wind_m_s\": [$wind, 0, 0]}" ;;
+    snow) fx="\"snow\": {\"intensity\": \"$intensity\", \"wind_m_s\": [$wind, 0, 0]}" ;;
+    rain+fog) fx="\"rain\": {\"intensity\": \"$intensity\", \"wind_m_s\": [$wind, 0, 0]}, \"fog\": {\"visibility_m\": $((150 + 100 * k))}" ;;
+    snow+fog) fx="\"snow\": {\"intensity\": \"$intensity\", \"wind_m_s\": [$wind, 0, 0]}, \"fog\": {\"visibility_m\": $((150 + 100 * k))}" ;;
+    none) fx="" ;;
+  esac
+  if [ "$drops" -gt 0 ]; then
+    [ -n "$fx" ] && fx="$fx, "
+    fx="$fx\"lens_droplets\": {\"count\": $drops, \"radius_mm\": [0.3, 1.5], \"glass_distance_m\": 0.015, \"slide_speed_mm_s\": $slide}"
+  fi
+  if [ -z "$fx" ]; then fx="\"fog\": {\"visibility_m\": 5000}"; fi  # a clear view: the faintest haze, no particles, no drops
+  echo "{\"seed\": $((1000 * si + k)), \"style\": \"$style\", \"effects\": {$fx}}"
+}
+
+for si in "${!SCENES[@]}"; do
+  scene=${SCENES[$si]}
+  if [ ! -f "$OUT/clear/$scene/dataset.json" ]; then
+    echo "== render $scene (clear, $PROFILE)"
+    "$BIN" --quiet generate --scene "$HERE/scenes/training/$scene.json" --weather clear --profile "$PROFILE" \
+      --no-colmap --out "$OUT/clear/$scene"
+  fi
+  for k in $(seq 0 $((WEATHERS - 1))); do
+    name=$(printf "%s_w%02d" "$scene" "$k")
+    [ -f "$OUT/$name/dataset.json" ] && continue
+    spec_for "$si" "$k" > "$OUT/specs/$name.json"
+    echo "== weather $name: $(cat "$OUT/specs/$name.json")"
+    "$BIN" --quiet weather --in "$OUT/clear/$scene" --spec "$OUT/specs/$name.json" --out "$OUT/$name" \
+      --targets --no-manifest --no-layers
+  done
+done
+
+seconds=$(( $(date +%s) - start ))
+datasets=$(find "$OUT" -mindepth 2 -maxdepth 2 -name dataset.json -not -path "$OUT/clear/*" | wc -l)
+views=$(find "$OUT" -path "$OUT/clear" -prune -o -path "*/images/*.png" -print | wc -l)
+size=$(du -sm "$OUT" | cut -f1)
+cat > "$OUT/manifest.json" <<EOF
+{"format": "weathergs-training-set", "scenes": ["park", "parking_lot", "harbour", "market"], "profile": "$PROFILE",
+ "weathers_per_scene": $WEATHERS, "datasets": $datasets, "views": $views, "size_mb": $size,
+ "seconds_this_run": $seconds, "recipe": "scripts/make-training-data.sh"}
+EOF
+echo "training set: $datasets datasets, $views views, $size MB in $OUT ($seconds s this run)"

@@ -1,0 +1,258 @@
+// The learned Lens Effect Detector (restoration/lens_detector.h), its post-processing and `weathergs
+// detect` / `weathergs train-led`.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "core/atomic_file.h"
+#include "core/dataset.h"
+#include "core/json_reader.h"
+#include "core/parallel.h"
+#include "core/rng.h"
+#include "restoration/detect_dataset.h"
+#include "restoration/led_training.h"
+#include "tests/core/test_util.h"
+#include "tests/generator/test_scene.h"
+
+namespace weathergs::restoration {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A textured view with blurry bright discs at fixed places (drops on the lens) and their mask.
+LedExample toy_example(int w, int h, uint64_t seed, int index, bool drops) {
+  LedExample e{Image(w, h, 3), Image(w, h, 1, ColorSpace::kLinear)};
+  Rng rng(seed, 7, uint64_t(index));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) e.image.at(x, y, c) = 0.2f + 0.3f * rng.uniform();
+  if (!drops) return e;
+  const double cx[2] = {0.3 * w, 0.7 * w}, cy[2] = {0.4 * h, 0.6 * h}, r = 0.12 * w;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int k = 0; k < 2; ++k) {
+        const double d = std::hypot(x + 0.5 - cx[k], y + 0.5 - cy[k]);
+        if (d < r) {
+          e.mask.at(x, y) = 1;
+          for (int c = 0; c < 3; ++c) e.image.at(x, y, c) = float(0.85 - 0.2 * d / r);
+        }
+      }
+  return e;
+}
+
+LedArchitecture tiny_arch() {
+  LedArchitecture a;
+  a.width = 32;
+  a.channels = 6;
+  a.steps = 2;
+  a.residual_blocks = 2;
+  return a;
+}
+
+TEST(LensDetectorTest, ShapesRangeAndParameterCount) {
+  const LedArchitecture a;  // the shipped architecture
+  const LensDetector led(a, 1);
+  // in 5->C (RGB, sharpness, previous attention), down C->C, blocks 2 convs C->C each, ConvLSTM 2C->4C, out 2C->1 (3x3 kernels + biases).
+  const int64_t c = a.channels;
+  const int64_t expect = (5 * c * 9 + c) + (c * c * 9 + c) + a.residual_blocks * 2 * (c * c * 9 + c) +
+                         (2 * c * 4 * c * 9 + 4 * c) + (2 * c * 9 + 1);
+  EXPECT_EQ(led.parameter_count(), expect);
+  const LedExample e = toy_example(90, 60, 3, 0, true);
+  const Image att = led.attention(e.image, "toy");
+  EXPECT_EQ(att.width, 90);
+  EXPECT_EQ(att.height, 60);
+  EXPECT_EQ(att.channels, 1);
+  for (float v : att.data) ASSERT_TRUE(v >= 0 && v <= 1) << v;
+  // An RGBA input gives the same attention as its RGB part.
+  Image rgba(90, 60, 4);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 90; ++x) {
+      for (int k = 0; k < 3; ++k) rgba.at(x, y, k) = e.image.at(x, y, k);
+      rgba.at(x, y, 3) = 1;
+    }
+  EXPECT_EQ(led.attention(rgba, "rgba").data, att.data);
+}
+
+TEST(LensDetectorTest, TinyTrainingReducesTheLossAndFindsTheDrops) {
+  std::vector<LedExample> set;
+  for (int i = 0; i < 8; ++i) set.push_back(toy_example(64, 48, 5, i, i % 4 != 3));
+  LensDetector led(tiny_arch(), 2);
+  const double before = led.loss(set, 0.8);
+  LedTrainOptions o;
+  o.arch = tiny_arch();
+  o.iterations = 150;
+  o.batch = 4;
+  o.learning_rate = 3e-3;
+  o.progress = false;
+  const LedTrainRecord rec = led.train(set, o);
+  const double after = led.loss(set, 0.8);
+  EXPECT_LT(after, 0.5 * before) << before << " -> " << after;
+  EXPECT_FALSE(rec.loss_curve.empty());
+  // The mean attention is higher inside the drops than outside.
+  const LedExample probe = toy_example(64, 48, 99, 0, true);
+  const Image att = led.attention(probe.image, "probe");
+  double in = 0, out = 0, n_in = 0, n_out = 0;
+  for (size_t i = 0; i < att.data.size(); ++i)
+    (probe.mask.data[i] > 0.5f ? (in += att.data[i], n_in += 1) : (out += att.data[i], n_out += 1));
+  EXPECT_GT(in / n_in, out / n_out + 0.3) << in / n_in << " vs " << out / n_out;
+}
+
+TEST(LensDetectorTest, SaveLoadRoundTripAndThreadCountInvariance) {
+  testing::TempDir tmp;
+  LensDetector led(LedArchitecture{}, 4);
+  led.set_threshold(0.42);
+  led.save(tmp / "w", Json{{"note", "test"}});
+  const LensDetector back = LensDetector::load(tmp / "w");
+  EXPECT_DOUBLE_EQ(back.threshold(), 0.42);
+  EXPECT_EQ(back.metadata().at("note"), "test");
+  const LedExample e = toy_example(120, 80, 6, 0, true);
+  const int before = num_threads();
+  set_num_threads(1);
+  const Image a1 = led.attention(e.image, "t1");
+  const Image b1 = back.attention(e.image, "t1");
+  set_num_threads(2);
+  const Image a2 = led.attention(e.image, "t2");
+  set_num_threads(before);
+  EXPECT_EQ(a1.data, b1.data);  // bit-identical after the round trip
+  EXPECT_EQ(a1.data, a2.data);  // and with 1 or 2 threads
+}
+
+TEST(LensDetectorTest, BadWeightsAndInputsAreInputErrors) {
+  testing::TempDir tmp;
+  EXPECT_THROW(LensDetector::load(tmp / "missing"), InputError);
+  LensDetector led(tiny_arch(), 1);
+  led.save(tmp / "w", Json::object());
+  // Corrupt blob: the sha256 check names the file.
+  {
+    std::string blob = read_file(tmp / "w.bin");
+    blob[10] ^= 0x5a;
+    write_file_atomic(tmp / "c.bin", blob);
+    fs::copy_file(tmp / "w.json", tmp / "c.json");
+    try {
+      LensDetector::load(tmp / "c");
+      FAIL() << "corrupt weights loaded";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("c.bin"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("make models"), std::string::npos) << e.what();
+    }
+  }
+  // Another format, another version, a missing blob, an architecture that does not match the table.
+  Json j = read_json_file(tmp / "w.json");
+  auto variant = [&](const std::string& stem, const std::function<void(Json&)>& edit, bool copy_bin = true) {
+    Json k = j;
+    edit(k);
+    write_file_atomic(tmp / (stem + ".json"), k.dump());
+    if (copy_bin) fs::copy_file(tmp / "w.bin", tmp / (stem + ".bin"));
+    EXPECT_THROW(LensDetector::load(tmp / stem), InputError) << stem;
+  };
+  variant("f", [](Json& k) { k["format"] = "weathergs-aef"; });
+  variant("v", [](Json& k) { k["version"] = 99; });
+  variant("b", [](Json&) {}, false);
+  variant("a", [](Json& k) { k["architecture"]["channels"] = 7; });
+  variant("x", [](Json& k) { k["architecture"]["unknown"] = 1; });
+  // Images: too few channels, non-finite values.
+  EXPECT_THROW(led.attention(Image(40, 30, 1), "grey"), InputError);
+  Image nan(40, 30, 3);
+  nan.data[5] = std::nanf("");
+  EXPECT_THROW(led.attention(nan, "nan"), InputError);
+  // Options.
+  LedMaskOptions m;
+  m.threshold = 1.5;
+  EXPECT_THROW(m.validate(), InputError);
+  LedTrainOptions t;
+  t.batch = 0;
+  EXPECT_THROW(t.validate(), InputError);
+  EXPECT_THROW(led.train({}, LedTrainOptions{}), InputError);
+}
+
+TEST(LensDetectorTest, MaskPostProcessing) {
+  Image att(9, 9, 1, ColorSpace::kLinear, 0.1f);
+  att.at(4, 4) = 0.6f;
+  att.at(0, 0) = 0.9f;
+  LedMaskOptions o;
+  o.dilate_iterations = 0;
+  Image m = attention_to_mask(att, 0.5, o);
+  EXPECT_EQ(m.at(4, 4), 1.f);
+  EXPECT_EQ(m.at(0, 0), 1.f);
+  EXPECT_EQ(m.at(3, 3), 0.f);
+  o.rule = LedThresholdRule::kBand;  // the released code's [0.5, 0.7]: 0.9 is outside the band
+  m = attention_to_mask(att, 0.5, o);
+  EXPECT_EQ(m.at(4, 4), 1.f);
+  EXPECT_EQ(m.at(0, 0), 0.f);
+  o.rule = LedThresholdRule::kAbove;
+  o.dilate_iterations = 3;  // 3x3 three times: a 7x7 square around the centre pixel
+  m = attention_to_mask(att, 0.5, o);
+  double sum = 0;
+  for (int y = 1; y <= 7; ++y)
+    for (int x = 1; x <= 7; ++x) sum += m.at(x, y);
+  EXPECT_EQ(sum, 49);
+  EXPECT_EQ(m.at(8, 8), 0.f);
+}
+
+int run_cli(const std::string& args, const std::string& log) {
+  const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet " + args + " > '" + log + "' 2>&1").c_str());
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+// A dataset whose images/ carry the toy drops (the same on every view) and masks/lens/ their masks.
+void make_drop_dataset(const std::string& dir, int views, uint64_t seed) {
+  testing::SceneOptions so;
+  so.views = views;
+  testing::make_clean_dataset(dir, so);
+  fs::create_directories(fs::path(dir) / "images");
+  fs::create_directories(fs::path(dir) / "masks/lens");
+  const Dataset ds = read_dataset(dir);
+  for (size_t i = 0; i < ds.cameras.size(); ++i) {
+    const Camera& c = ds.cameras[i];
+    const LedExample e = toy_example(c.width, c.height, seed, int(i), true);
+    Image img = read_image(ds.path(ImageKind::kClean, c.name));
+    for (int y = 0; y < c.height; ++y)
+      for (int x = 0; x < c.width; ++x)
+        if (e.mask.at(x, y) > 0)
+          for (int k = 0; k < 3; ++k) img.at(x, y, k) = e.image.at(x, y, k);
+    write_image(ds.path(ImageKind::kImages, c.name), img);
+    write_mask(ds.path(ImageKind::kLensMask, c.name), e.mask);
+  }
+}
+
+TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
+  testing::TempDir tmp;
+  make_drop_dataset(tmp / "train", 8, 1);
+  make_drop_dataset(tmp / "held", 8, 2);
+  ASSERT_EQ(run_cli("train-led --data " + (tmp / "train") + " --held-out " + (tmp / "held") + " --out " + (tmp / "w") +
+                        " --iterations 200 --batch 4 --learning-rate 0.01 --width 48 --channels 6 --steps 2",
+                    tmp / "t.log"), 0)
+      << read_file(tmp / "t.log");
+  const Json w = read_json_file(tmp / "w.json");
+  EXPECT_EQ(w.at("calibration").at("held_out").size(), 1u);
+  EXPECT_NE(w.at("command").get<std::string>().find("--iterations 200"), std::string::npos);
+  EXPECT_GT(w.at("calibration").at("mean_iou").get<double>(), 0.5) << read_file(tmp / "t.log");
+  // Averaged over the training views: one mask, written for every view.
+  ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "m"), tmp / "d.log"), 0)
+      << read_file(tmp / "d.log");
+  const Dataset ds = read_dataset(tmp / "held");
+  const std::string first = read_file(tmp / ("m/" + ds.cameras[0].name + ".png"));
+  for (const Camera& c : ds.cameras) EXPECT_EQ(read_file(tmp / ("m/" + c.name + ".png")), first) << c.name;
+  const Json r = read_json_file(tmp / "m/detect.json");
+  EXPECT_EQ(r.at("averaging"), "train-views");
+  EXPECT_EQ(r.at("averaged_views").size(), ds.split("train").size());  // never the test views
+  EXPECT_EQ(r.at("views").size(), ds.cameras.size());
+  // The dataset has masks/lens: the averaged mask is scored against them (train views).
+  EXPECT_EQ(r.at("ground_truth").at("views"), ds.split("train").size());
+  EXPECT_GT(r.at("ground_truth").at("iou").get<double>(), 0.5);
+  // Per view: each view its own mask; with 1 and 2 threads the same bytes.
+  ASSERT_EQ(run_cli("--threads 1 detect --per-view --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p1"), tmp / "p1.log"), 0);
+  ASSERT_EQ(run_cli("--threads 2 detect --per-view --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p2"), tmp / "p2.log"), 0);
+  for (const Camera& c : ds.cameras) EXPECT_EQ(read_file(tmp / ("p1/" + c.name + ".png")), read_file(tmp / ("p2/" + c.name + ".png")));
+  // Bad input: missing weights, a threshold out of range: exit 2, nothing written.
+  EXPECT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "nope") + " --out " + (tmp / "g"), tmp / "b1.log"), 2);
+  EXPECT_NE(read_file(tmp / "b1.log").find("nope.json"), std::string::npos) << read_file(tmp / "b1.log");
+  EXPECT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --images " + (tmp / "none") + " --out " + (tmp / "g"), tmp / "b2.log"), 2);
+  EXPECT_FALSE(fs::exists(tmp / "g"));
+}
+
+}  // namespace
+}  // namespace weathergs::restoration
