@@ -51,7 +51,7 @@ struct DetectDatasetOptions {
   std::string images_dir;  // detect on these <view>.png instead of the dataset's images/ (e.g. AEF output)
   LedAveraging averaging = LedAveraging::kTrainViews;
   LedMaskOptions mask;
-  int batch = 4;           // views per network call
+  int batch = 1;           // views per network call (batches of 4 measured slower per view)
 };
 
 struct DetectViewReport {
@@ -73,6 +73,6 @@ struct DetectDatasetReport {
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& options);
 
 // The mean attention of `views` (sRGB images of one size): the averaging step on its own (calibration).
-Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch = 4);
+Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch = 1);
 
 }  // namespace weathergs::restoration

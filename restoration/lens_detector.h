@@ -81,7 +81,8 @@ class LensDetector {
   LedTrainRecord train(const std::vector<LedExample>& examples, const LedTrainOptions& options);
 
   // The mean of the N attention maps, bilinearly resized to the image's size, in [0, 1]. `image`:
-  // sRGB, 3 or 4 channels (alpha ignored); `where` names it in errors. Identical with 1 or 2 threads.
+  // sRGB, 3 or 4 channels (alpha ignored); `where` names it in errors. Runs on one libtorch thread
+  // whatever --threads says (faster for this small network; bench_restoration).
   Image attention(const Image& image, const std::string& where) const;
   // Attention for several images at once (same size), one batch: faster than one by one.
   std::vector<Image> attention(const std::vector<Image>& images, const std::string& where) const;

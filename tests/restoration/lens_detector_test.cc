@@ -100,6 +100,24 @@ TEST(LensDetectorTest, TinyTrainingReducesTheLossAndFindsTheDrops) {
   EXPECT_GT(in / n_in, out / n_out + 0.3) << in / n_in << " vs " << out / n_out;
 }
 
+TEST(LensDetectorTest, TrainingWithOneThreadIsReproducible) {
+  std::vector<LedExample> set;
+  for (int i = 0; i < 4; ++i) set.push_back(toy_example(64, 48, 8, i, true));
+  LedTrainOptions o;
+  o.arch = tiny_arch();
+  o.iterations = 20;
+  o.batch = 2;
+  o.threads = 1;
+  o.progress = false;
+  testing::TempDir tmp;
+  for (const char* stem : {"a", "b"}) {
+    LensDetector led(tiny_arch(), 3);
+    led.train(set, o);
+    led.save(tmp / stem, Json::object());
+  }
+  EXPECT_EQ(read_file(tmp / "a.bin"), read_file(tmp / "b.bin"));
+}
+
 TEST(LensDetectorTest, SaveLoadRoundTripAndThreadCountInvariance) {
   testing::TempDir tmp;
   LensDetector led(LedArchitecture{}, 4);
