@@ -66,16 +66,34 @@ LedScore score_lens_masks(const std::string& name, const std::vector<Image>& pre
   return s;
 }
 
-Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch) {
-  if (views.empty()) throw InputError(where, "no views to average");
-  Image sum(views[0].width, views[0].height, 1, ColorSpace::kLinear);
+namespace {
+
+// The network over `views` in chunks of `batch`, results in view order.
+std::vector<Image> attention_in_batches(const LensDetector& led, const std::vector<Image>& views, const std::string& where,
+                                        int batch, ProgressBar* bar) {
+  std::vector<Image> out;
   for (size_t b = 0; b < views.size(); b += size_t(batch)) {
     const std::vector<Image> chunk(views.begin() + long(b), views.begin() + long(std::min(views.size(), b + size_t(batch))));
-    for (const Image& a : led.attention(chunk, where))  // in view order: a fixed summation order
-      for (size_t i = 0; i < sum.data.size(); ++i) sum.data[i] += a.data[i];
+    for (Image& a : led.attention(chunk, where)) out.push_back(std::move(a));
+    if (bar) bar->tick(int64_t(chunk.size()));
   }
-  for (float& v : sum.data) v /= float(views.size());
+  return out;
+}
+
+// Pixel-wise mean, summed in view order (a fixed summation order).
+Image average(const std::vector<Image>& maps) {
+  Image sum(maps[0].width, maps[0].height, 1, ColorSpace::kLinear);
+  for (const Image& a : maps)
+    for (size_t i = 0; i < sum.data.size(); ++i) sum.data[i] += a.data[i];
+  for (float& v : sum.data) v /= float(maps.size());
   return sum;
+}
+
+}  // namespace
+
+Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch) {
+  if (views.empty()) throw InputError(where, "no views to average");
+  return average(attention_in_batches(led, views, where, batch, nullptr));
 }
 
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& o) {
@@ -111,22 +129,12 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   std::vector<Image> attention;
   {
     ProgressBar bar("detect lens drops", int64_t(images.size()));
-    for (size_t b = 0; b < images.size(); b += size_t(o.batch)) {
-      const std::vector<Image> chunk(images.begin() + long(b), images.begin() + long(std::min(images.size(), b + size_t(o.batch))));
-      for (Image& a : led.attention(chunk, ds.root)) attention.push_back(std::move(a));
-      bar.tick(int64_t(chunk.size()));
-    }
+    attention = attention_in_batches(led, images, ds.root, o.batch, &bar);
   }
   DetectDatasetReport report;
   report.threshold = t;
   report.seconds_per_view = seconds_since(net_start) / double(std::max<size_t>(1, images.size()));
-  Image averaged;
-  if (o.averaging == LedAveraging::kTrainViews) {
-    averaged = Image(attention[0].width, attention[0].height, 1, ColorSpace::kLinear);
-    for (const Image& a : attention)
-      for (size_t i = 0; i < a.data.size(); ++i) averaged.data[i] += a.data[i];
-    for (float& v : averaged.data) v /= float(attention.size());
-  }
+  const Image averaged = o.averaging == LedAveraging::kTrainViews ? average(attention) : Image();
   AtomicDirectory dir(out);
   Json views = Json::array();
   std::vector<Image> scored_masks, scored_truth;  // ground truth: the averaged (or every) view

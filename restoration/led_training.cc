@@ -39,17 +39,6 @@ std::vector<LedExample> read_led_examples(const std::string& dataset) {
   return out;
 }
 
-LedScore score_led(const LensDetector& led, const std::string& dataset, double t, const LedMaskOptions& mo) {
-  const Dataset ds = read_dataset(dataset);
-  std::vector<Image> views, gts;
-  for (const std::string& v : ds.split("train")) {
-    const Camera& c = ds.camera(v);
-    views.push_back(read_image(ds.path(ImageKind::kImages, v)));
-    gts.push_back(lens_mask_or_zero(ds, c));
-  }
-  return score_lens_masks(dataset_name(dataset), {attention_to_mask(mean_attention(led, views, dataset), t, mo)}, gts);
-}
-
 LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mo) {
   if (held_out.empty()) throw InputError("LED calibration", "needs at least one held-out dataset");
   // The mean attention is computed once per dataset; only the threshold varies.

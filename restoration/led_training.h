@@ -14,10 +14,6 @@ namespace weathergs::restoration {
 // has no drops: its masks are zero.
 std::vector<LedExample> read_led_examples(const std::string& dataset);
 
-// The attention averaged over the train views of `dataset`, thresholded at `t` with `mask_options`,
-// against each train view's masks/lens (pixel counts summed over views: one IoU per dataset).
-LedScore score_led(const LensDetector& led, const std::string& dataset, double t, const LedMaskOptions& mask_options);
-
 struct LedCalibration {
   double threshold = 0.5;
   double mean_iou = 0;                  // over the held-out datasets with drops

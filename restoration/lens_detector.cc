@@ -132,6 +132,24 @@ torch::Tensor attention_loss(const std::vector<torch::Tensor>& maps, const torch
   return loss;
 }
 
+// Images and masks of `examples` at the internal size (one aspect ratio for all); InputError names
+// `where` + the example's index.
+void examples_to_tensors(const std::vector<LedExample>& examples, const LedArchitecture& arch, const std::string& where,
+                         std::vector<torch::Tensor>& xs, std::vector<torch::Tensor>& ms) {
+  const int W = arch.width;
+  const int H = internal_height(arch, examples[0].image.width, examples[0].image.height);
+  for (size_t i = 0; i < examples.size(); ++i) {
+    const LedExample& e = examples[i];
+    const std::string name = where + std::to_string(i);
+    if (e.mask.channels != 1 || e.mask.width != e.image.width || e.mask.height != e.image.height)
+      throw InputError(name, "mask " + e.mask.to_string() + " does not match image " + e.image.to_string());
+    if (internal_height(arch, e.image.width, e.image.height) != H)
+      throw InputError(name, "has another aspect ratio than the first example (" + e.image.to_string() + ")");
+    xs.push_back(to_tensor(e.image, W, H, name));
+    ms.push_back(mask_to_tensor(e.mask, W, H));
+  }
+}
+
 std::string shape_string(const std::vector<int64_t>& s) {
   std::string out = "[";
   for (size_t i = 0; i < s.size(); ++i) out += (i ? ", " : "") + std::to_string(s[i]);
@@ -279,19 +297,8 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
   if (examples.empty()) throw InputError("LED training set", "is empty");
   const auto start = std::chrono::steady_clock::now();
   torch::set_num_threads(o.threads > 0 ? o.threads : num_threads());
-  const int W = impl_->arch.width;
-  const int H = internal_height(impl_->arch, examples[0].image.width, examples[0].image.height);
   std::vector<torch::Tensor> xs, ms;
-  for (size_t i = 0; i < examples.size(); ++i) {
-    const LedExample& e = examples[i];
-    const std::string where = "LED training example " + std::to_string(i);
-    if (e.mask.channels != 1 || e.mask.width != e.image.width || e.mask.height != e.image.height)
-      throw InputError(where, "mask " + e.mask.to_string() + " does not match image " + e.image.to_string());
-    if (internal_height(impl_->arch, e.image.width, e.image.height) != H)
-      throw InputError(where, "has another aspect ratio than the first example (" + e.image.to_string() + ")");
-    xs.push_back(to_tensor(e.image, W, H, where));
-    ms.push_back(mask_to_tensor(e.mask, W, H));
-  }
+  examples_to_tensors(examples, impl_->arch, "LED training example ", xs, ms);
   LedNet& net = impl_->net;
   net->train();
   torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(o.learning_rate));
@@ -367,12 +374,8 @@ Image LensDetector::attention(const Image& image, const std::string& where) cons
 
 double LensDetector::loss(const std::vector<LedExample>& examples, double theta) const {
   if (examples.empty()) throw InputError("LED loss", "no examples");
-  const int W = impl_->arch.width, H = internal_height(impl_->arch, examples[0].image.width, examples[0].image.height);
   std::vector<torch::Tensor> bx, bm;
-  for (const LedExample& e : examples) {
-    bx.push_back(to_tensor(e.image, W, H, "LED loss"));
-    bm.push_back(mask_to_tensor(e.mask, W, H));
-  }
+  examples_to_tensors(examples, impl_->arch, "LED loss example ", bx, bm);
   torch::NoGradGuard no_grad;
   return attention_loss(impl_->net->forward(torch::stack(bx)), torch::stack(bm), theta).item<double>();
 }
