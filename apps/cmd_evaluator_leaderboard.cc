@@ -4,6 +4,7 @@
 #include "apps/command.h"
 #include "core/atomic_file.h"
 #include "evaluator/leaderboard.h"
+#include "evaluator/paper_tables.h"
 
 namespace weathergs::cli {
 namespace {
@@ -11,13 +12,16 @@ namespace {
 struct LeaderboardArgs {
   std::vector<std::string> results;
   std::string format = "md", output;
+  bool paper = false;
 };
 
 int run_leaderboard(const LeaderboardArgs& args) {
   const evaluator::TableFormat format = evaluator::parse_table_format(args.format);
   std::vector<evaluator::LoadedResults> loaded;
   for (const auto& p : args.results) loaded.push_back({p, evaluator::read_results(p)});
-  const std::string text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded), format);
+  const std::string text =
+      args.paper ? evaluator::render_paper_tables(evaluator::build_paper_tables(loaded), format)
+                 : evaluator::render_leaderboard(evaluator::build_leaderboard(loaded), format);
   if (args.output.empty() || args.output == "-") {
     std::fputs(text.c_str(), stdout);
   } else {
@@ -33,6 +37,9 @@ Command make_leaderboard(CLI::App& root) {
   sub->add_option("results", args->results, "Results JSON files")->required();
   sub->add_option("--format", args->format, "md, csv, latex or html")->capture_default_str();
   sub->add_option("-o,--output", args->output, "Output file (default: stdout)");
+  sub->add_flag("--paper", args->paper,
+                "The paper's four tables: I snow, II rain (oracle and gt-masks as reference lines), III the "
+                "ablation averaged over all variants, IV the cost per method (docs/study.md)");
   return {sub, [args] { return run_leaderboard(*args); }};
 }
 

@@ -23,11 +23,22 @@ ProgressBar::ProgressBar(std::string label, int64_t total)
 ProgressBar::~ProgressBar() { finish(); }
 
 void ProgressBar::tick(int64_t n) {
-  done_ += n;
-  if (!interactive_) return;
+  const int64_t before = done_.fetch_add(n);
+  if (g_quiet) return;
   auto now = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(mutex_);
-  if (now - last_draw_ > std::chrono::milliseconds(100) || done_ >= total_) {
+  if (interactive_) {
+    if (now - last_draw_ > std::chrono::milliseconds(100) || done_ >= total_) {
+      last_draw_ = now;
+      draw(false);
+    }
+    return;
+  }
+  // Logs (stderr not a terminal): one plain line at every tenth of the work and at least every
+  // 30 s, so a log read while the job runs shows where it is.
+  const int64_t after = before + n;
+  const bool next_tenth = total_ > 0 && (after * 10 / total_) > (before * 10 / total_) && after < total_;
+  if (next_tenth || now - last_draw_ > std::chrono::seconds(30)) {
     last_draw_ = now;
     draw(false);
   }
@@ -47,11 +58,11 @@ void ProgressBar::draw(bool final) {
   std::string bar(size_t(filled < 0 ? 0 : filled > width ? width : filled), '#');
   bar.resize(width, '.');
   double eta = frac > 0 ? secs / frac - secs : 0;
-  std::fprintf(stderr, "\r%s [%s] %lld/%lld %.1fs%s%s %s\033[K", label_.c_str(), bar.c_str(),
+  std::fprintf(stderr, "%s%s [%s] %lld/%lld %.1fs%s%s %s%s", interactive_ ? "\r" : "", label_.c_str(), bar.c_str(),
                (long long)done, (long long)total_, secs,
                final ? "" : " eta ", final ? "" : std::to_string(int(eta)).append("s").c_str(),
-               status_.c_str());
-  if (final) std::fputc('\n', stderr);
+               status_.c_str(), interactive_ ? "\033[K" : "");
+  if (final || !interactive_) std::fputc('\n', stderr);
   std::fflush(stderr);
 }
 
@@ -59,7 +70,7 @@ void ProgressBar::finish() {
   std::lock_guard<std::mutex> lock(mutex_);
   if (finished_) return;
   finished_ = true;
-  if (interactive_) draw(true);
+  if (!g_quiet) draw(true);
 }
 
 }  // namespace weathergs

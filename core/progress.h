@@ -1,5 +1,6 @@
-// A progress bar for long loops, on stderr. Quiet when stderr is not a terminal or when
-// set_quiet(true) (the CLI's --quiet); then only a final one-line summary is printed unless quiet.
+// A progress bar for long loops, on stderr. On a terminal it redraws one line; otherwise (a log
+// file, a workflow) it prints a plain line at every tenth of the work, at least every 30 s, and a
+// final summary. set_quiet(true) (the CLI's --quiet) silences both.
 // Thread-safe: tick() may be called from any worker.
 #pragma once
 

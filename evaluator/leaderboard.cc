@@ -55,6 +55,36 @@ CellStats stats(const std::vector<const Results*>& rs) {
 
 }  // namespace
 
+std::string csv_escape(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string o = "\"";
+  for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return o + "\"";
+}
+
+std::string latex_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (std::string("&%$#_{}").find(c) != std::string::npos) o += '\\';
+    o += c;
+  }
+  return o;
+}
+
+std::string html_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
 std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results) {
   if (results.empty()) throw InputError("leaderboard", "no results files given");
   std::vector<std::string> weathers;
@@ -120,13 +150,19 @@ std::vector<Column> columns(const LeaderboardTable& t) {
   std::vector<Column> cols;
   for (const auto& s : t.scenes)
     for (int k = 0; k < 3; ++k) cols.push_back({s, k});
-  for (int k = 0; k < 3; ++k) cols.push_back({"Average", k});
+  for (int k = 0; k < 3; ++k) cols.push_back({t.average_label, k});
   return cols;
 }
 
 const CellStats& cell(const LeaderboardTable& t, size_t m, size_t col) {
   const size_t s = col / 3;
   return s < t.scenes.size() ? t.cells[m][s] : t.average[m];
+}
+
+bool is_reference(const LeaderboardTable& t, size_t m) { return m < t.reference.size() && t.reference[m]; }
+
+std::string method_label(const LeaderboardTable& t, size_t m) {
+  return is_reference(t, m) ? t.methods[m] + " (reference)" : t.methods[m];
 }
 
 bool present(const CellStats& c, int k) { return c.n > 0 && (k != 2 || c.has_lpips); }
@@ -144,7 +180,7 @@ std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
     bool any = false;
     for (size_t m = 0; m < t.methods.size(); ++m) {
       const CellStats& c = cell(t, m, col);
-      if (!present(c, k)) continue;
+      if (!present(c, k) || is_reference(t, m)) continue;
       double v = value(c, k);
       if (!any || (kHigherBetter[k] ? v > best_v : v < best_v)) best_v = v;
       any = true;
@@ -153,7 +189,7 @@ std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
     best_text = format_metric(best_v, kDecimals[k]);
     for (size_t m = 0; m < t.methods.size(); ++m) {
       const CellStats& c = cell(t, m, col);
-      best[m][col] = present(c, k) && format_metric(value(c, k), kDecimals[k]) == best_text;
+      best[m][col] = present(c, k) && !is_reference(t, m) && format_metric(value(c, k), kDecimals[k]) == best_text;
     }
   }
   return best;
@@ -166,41 +202,13 @@ std::string cell_text(const CellStats& c, int k, const char* pm) {
   return s;
 }
 
-std::string weather_title(const std::string& w) {
+std::string table_title(const LeaderboardTable& table) {
+  if (!table.title.empty()) return table.title;
+  const std::string& w = table.weather;
   if (w.empty()) return "Weather: (unspecified)";
   std::string t = w;
   t[0] = char(std::toupper(static_cast<unsigned char>(t[0])));
   return "Weather: " + t;
-}
-
-std::string csv_escape(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
-  std::string o = "\"";
-  for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return o + "\"";
-}
-
-std::string latex_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    if (std::string("&%$#_{}").find(c) != std::string::npos) o += '\\';
-    o += c;
-  }
-  return o;
-}
-
-std::string html_escape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
 }
 
 bool any_repeats(const LeaderboardTable& t) {
@@ -211,21 +219,22 @@ bool any_repeats(const LeaderboardTable& t) {
 }
 
 std::string protocol_note(const LeaderboardTable& t) {
-  return "Protocol: " + t.protocol.to_string() + ". Best per column in bold." +
-         (any_repeats(t) ? " Cells with repeated runs show mean ± standard deviation." : "") +
-         " Average: mean over scenes, only for methods with every scene.";
+  const bool refs = std::find(t.reference.begin(), t.reference.end(), true) != t.reference.end();
+  return "Protocol: " + t.protocol.to_string() + ". Best per column in bold" +
+         (refs ? " (reference lines excluded)." : ".") +
+         (any_repeats(t) ? " Cells with repeated runs show mean ± standard deviation." : "") + " " + t.average_note;
 }
 
 void markdown(std::ostringstream& o, const LeaderboardTable& t) {
   const auto cols = columns(t);
   const auto best = best_flags(t);
-  o << "## " << weather_title(t.weather) << "\n\n| Method |";
+  o << "## " << table_title(t) << "\n\n| Method |";
   for (const auto& c : cols) o << " " << c.group << " " << kMetricName[c.metric] << (kHigherBetter[c.metric] ? " ↑" : " ↓") << " |";
   o << "\n|---|";
   for (size_t i = 0; i < cols.size(); ++i) o << "---:|";
   o << "\n";
   for (size_t m = 0; m < t.methods.size(); ++m) {
-    o << "| " << t.methods[m] << " |";
+    o << "| " << method_label(t, m) << " |";
     for (size_t col = 0; col < cols.size(); ++col) {
       std::string s = cell_text(cell(t, m, col), cols[col].metric, " ± ");
       if (s.empty()) s = "–";
@@ -265,19 +274,19 @@ void latex(std::ostringstream& o, const LeaderboardTable& t) {
   const auto cols = columns(t);
   const auto best = best_flags(t);
   const size_t groups = t.scenes.size() + 1;
-  o << "% " << weather_title(t.weather) << ". " << protocol_note(t) << "\n";
-  o << "\\begin{table}[t]\n\\centering\n\\caption{" << latex_escape(weather_title(t.weather)) << "}\n";
+  o << "% " << table_title(t) << ". " << protocol_note(t) << "\n";
+  o << "\\begin{table}[t]\n\\centering\n\\caption{" << latex_escape(table_title(t)) << "}\n";
   o << "\\resizebox{\\linewidth}{!}{%\n\\begin{tabular}{l" << std::string(cols.size(), 'c') << "}\n\\toprule\n";
   o << "Method";
   for (size_t g = 0; g < groups; ++g)
-    o << " & \\multicolumn{3}{c}{" << latex_escape(g < t.scenes.size() ? t.scenes[g] : "Average") << "}";
+    o << " & \\multicolumn{3}{c}{" << latex_escape(g < t.scenes.size() ? t.scenes[g] : t.average_label) << "}";
   o << " \\\\\n";
   for (size_t g = 0; g < groups; ++g) o << "\\cmidrule(lr){" << 2 + 3 * g << "-" << 4 + 3 * g << "}";
   o << "\n";
   for (size_t g = 0; g < groups; ++g) o << " & PSNR$\\uparrow$ & SSIM$\\uparrow$ & LPIPS$\\downarrow$";
   o << " \\\\\n\\midrule\n";
   for (size_t m = 0; m < t.methods.size(); ++m) {
-    o << latex_escape(t.methods[m]);
+    o << latex_escape(method_label(t, m));
     for (size_t col = 0; col < cols.size(); ++col) {
       std::string s = cell_text(cell(t, m, col), cols[col].metric, "$\\pm$");
       if (s == "+inf") s = "$+\\infty$";
@@ -293,15 +302,15 @@ void latex(std::ostringstream& o, const LeaderboardTable& t) {
 void html(std::ostringstream& o, const LeaderboardTable& t) {
   const auto cols = columns(t);
   const auto best = best_flags(t);
-  o << "<h2>" << html_escape(weather_title(t.weather)) << "</h2>\n<table>\n<thead>\n<tr><th rowspan=\"2\">Method</th>";
+  o << "<h2>" << html_escape(table_title(t)) << "</h2>\n<table>\n<thead>\n<tr><th rowspan=\"2\">Method</th>";
   for (size_t g = 0; g <= t.scenes.size(); ++g)
-    o << "<th colspan=\"3\" class=\"group\">" << html_escape(g < t.scenes.size() ? t.scenes[g] : "Average") << "</th>";
+    o << "<th colspan=\"3\" class=\"group\">" << html_escape(g < t.scenes.size() ? t.scenes[g] : t.average_label) << "</th>";
   o << "</tr>\n<tr>";
   for (const auto& c : cols)
     o << "<th>" << kMetricName[c.metric] << (kHigherBetter[c.metric] ? "&thinsp;&uarr;" : "&thinsp;&darr;") << "</th>";
   o << "</tr>\n</thead>\n<tbody>\n";
   for (size_t m = 0; m < t.methods.size(); ++m) {
-    o << "<tr><td class=\"method\">" << html_escape(t.methods[m]) << "</td>";
+    o << "<tr><td class=\"method\">" << html_escape(method_label(t, m)) << "</td>";
     for (size_t col = 0; col < cols.size(); ++col) {
       std::string s = cell_text(cell(t, m, col), cols[col].metric, " &plusmn; ");
       if (s.empty()) s = "&ndash;";
@@ -314,37 +323,45 @@ void html(std::ostringstream& o, const LeaderboardTable& t) {
 
 }  // namespace
 
-std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format) {
+std::string document_begin(TableFormat format, const std::string& title) {
+  switch (format) {
+    case TableFormat::kMarkdown: return "# " + title + "\n\n";
+    case TableFormat::kCsv: return "";
+    case TableFormat::kLatex: return "% " + title + ". Generated by weathergs leaderboard; needs \\usepackage{booktabs,graphicx}\n";
+    case TableFormat::kHtml:
+      return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>weathergs " +
+             html_escape(title) + "</title>\n"
+             "<style>\nbody{font-family:system-ui,sans-serif;margin:2em;color:#222}\n"
+             "table{border-collapse:collapse;margin-bottom:0.5em}\n"
+             "th,td{padding:4px 8px;text-align:right;font-variant-numeric:tabular-nums}\n"
+             "thead th{border-bottom:1px solid #444}th.group{border-bottom:1px solid #999}\n"
+             "td.method,th[rowspan]{text-align:left}td.first,th.group{border-left:1px solid #ccc}\n"
+             "tbody tr:nth-child(even){background:#f4f4f4}p.note{color:#666;font-size:0.9em}\n"
+             "</style>\n</head>\n<body>\n<h1>" + html_escape(title) + "</h1>\n";
+  }
+  return "";
+}
+
+std::string document_end(TableFormat format) { return format == TableFormat::kHtml ? "</body>\n</html>\n" : ""; }
+
+std::string render_table(const LeaderboardTable& t, TableFormat format, bool csv_header) {
   std::ostringstream o;
   switch (format) {
-    case TableFormat::kMarkdown:
-      o << "# Leaderboard\n\n";
-      for (const auto& t : tables) markdown(o, t);
-      break;
-    case TableFormat::kCsv:
-      for (size_t i = 0; i < tables.size(); ++i) {
-        if (i) o << "\n";
-        csv(o, tables[i], true);
-      }
-      break;
-    case TableFormat::kLatex:
-      o << "% Generated by weathergs leaderboard; needs \\usepackage{booktabs,graphicx}\n";
-      for (const auto& t : tables) latex(o, t);
-      break;
-    case TableFormat::kHtml:
-      o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>weathergs leaderboard</title>\n"
-           "<style>\nbody{font-family:system-ui,sans-serif;margin:2em;color:#222}\n"
-           "table{border-collapse:collapse;margin-bottom:0.5em}\n"
-           "th,td{padding:4px 8px;text-align:right;font-variant-numeric:tabular-nums}\n"
-           "thead th{border-bottom:1px solid #444}th.group{border-bottom:1px solid #999}\n"
-           "td.method,th[rowspan]{text-align:left}td.first,th.group{border-left:1px solid #ccc}\n"
-           "tbody tr:nth-child(even){background:#f4f4f4}p.note{color:#666;font-size:0.9em}\n"
-           "</style>\n</head>\n<body>\n<h1>Leaderboard</h1>\n";
-      for (const auto& t : tables) html(o, t);
-      o << "</body>\n</html>\n";
-      break;
+    case TableFormat::kMarkdown: markdown(o, t); break;
+    case TableFormat::kCsv: csv(o, t, csv_header); break;
+    case TableFormat::kLatex: latex(o, t); break;
+    case TableFormat::kHtml: html(o, t); break;
   }
   return o.str();
+}
+
+std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format) {
+  std::string o = document_begin(format, "Leaderboard");
+  for (size_t i = 0; i < tables.size(); ++i) {
+    if (i && format == TableFormat::kCsv) o += "\n";
+    o += render_table(tables[i], format, true);
+  }
+  return o + document_end(format);
 }
 
 }  // namespace weathergs::evaluator

@@ -29,16 +29,29 @@ struct CellStats {
 
 struct LeaderboardTable {
   std::string weather;
+  std::string title;                 // heading; empty: "Weather: <Weather>"
   std::vector<std::string> scenes;   // order of first appearance
   std::vector<std::string> methods;  // order of first appearance
   // cells[method][scene]; n == 0 when the method has no result for that scene.
   std::vector<std::vector<CellStats>> cells;
   std::vector<CellStats> average;    // per method: mean over scenes; n == 0 unless all scenes present
+  // Per method (empty = none): a reference line such as the oracle, shown but never in bold.
+  std::vector<bool> reference;
+  std::string average_label = "Average";
+  std::string average_note = "Average: mean over scenes, only for methods with every scene.";
   Protocol protocol;
 };
 
 // Groups results into tables. Results in one table must share a protocol (InputError naming files).
 std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results);
 std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format);
+
+// Pieces of render_leaderboard for documents that add their own tables (evaluator/paper_tables.h).
+std::string render_table(const LeaderboardTable& table, TableFormat format, bool csv_header);
+std::string document_begin(TableFormat format, const std::string& title);
+std::string document_end(TableFormat format);
+std::string csv_escape(const std::string& s);
+std::string latex_escape(const std::string& s);
+std::string html_escape(const std::string& s);
 
 }  // namespace weathergs::evaluator

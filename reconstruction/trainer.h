@@ -49,13 +49,13 @@ struct TrainOptions {
   std::array<double, 3> background = {0, 0, 0};  // sRGB in [0, 1]
   // Short runs: the reference schedule (densify from 500 to 15000 every 100, reset opacity every
   // 3000, SH degree + 1 every 1000) is made for 30000 iterations; run as is, `--iterations 3000` ends
-  // on a reset. kScaled (default) scales densify_from, densify_until, opacity_reset_interval and
-  // sh_degree_interval by s = iterations / 30000 (when s < 1) and densification_interval by s with a
-  // floor of 10, so every run has the reference's shape: densification and resets in the first half,
-  // the last reset at 40% of the run, the second half to recover. The reset interval keeps the
-  // reference's 30 densification steps per reset (a floor of 300 iterations), so runs shorter than
-  // 3000 iterations reset less often or never. s >= 1 leaves the reference's.
-  // Only fields still at their reference value are scaled; a value set by hand is kept.
+  // on a reset. kScaled (default) scales densify_from, densify_until and sh_degree_interval by
+  // s = iterations / 30000 (when s < 1), so densification happens in the first half and the second
+  // half recovers. densification_interval keeps the reference's 100 (the time a new Gaussian gets
+  // to settle; scaled to 10 it ran away on heavy weather), and the reset interval keeps at least
+  // the reference's 30 densification steps per reset, so runs up to 6000 iterations never reset.
+  // s >= 1 leaves the reference's. Only fields still at their reference value are changed; a value
+  // set by hand is kept (docs/reconstruction.md, "Schedule for short runs").
   enum class Schedule { kReference, kScaled };
   Schedule schedule = Schedule::kScaled;
   // Without COLMAP points (reconstruction/init_random.h): kPhotoConsistent places each random ray's

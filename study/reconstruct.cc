@@ -158,6 +158,14 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   out.results = evaluator::evaluate(e);
   out.results.method_info["initialization"] = out.initialization;
   out.results.method_info["method_description"] = method_description(o.method);
+  // Restoration time is part of a method's cost (Table IV): the AEF's and the LED's own reports.
+  auto report_seconds = [&](const fs::path& report) {
+    return fs::exists(report) ? read_json_file(report.string()).value("seconds", 0.0) : 0.0;
+  };
+  if (r.particle_filter)
+    out.results.method_info["filter_seconds"] = report_seconds(run / kFilteredDir / restoration::kFilterReportFile);
+  if (r.lens_detector)
+    out.results.method_info["detect_seconds"] = report_seconds(run / kDetectedDir / restoration::kDetectReportFile);
   evaluator::write_results(results_path.string(), out.results);
   out.train_seconds = out.results.method_info.value("train_seconds", 0.0);
   out.peak_rss_mb = out.results.method_info.value("peak_rss_mb", out.peak_rss_mb);

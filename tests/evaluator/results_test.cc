@@ -6,6 +6,7 @@
 #include "core/atomic_file.h"
 #include "evaluator/check.h"
 #include "evaluator/leaderboard.h"
+#include "evaluator/paper_tables.h"
 #include "evaluator/results.h"
 #include "tests/core/test_util.h"
 
@@ -109,6 +110,70 @@ TEST(LeaderboardTest, RepeatedRunsShowSpreadAndProtocolsMustMatch) {
   rs[1].results.protocol.ssim = "gaussian11_sigma1.5_same";
   EXPECT_THROW(build_leaderboard(rs), InputError);
   EXPECT_THROW(parse_table_format("pdf"), InputError);
+}
+
+TEST(PaperTablesTest, SnowRainAblationAndCostWithReferenceLines) {
+  std::vector<LoadedResults> rs;
+  auto add = [&](const std::string& m, const std::string& scene, const std::string& w, double psnr, double train_s) {
+    Results r = make(m, scene, w, psnr, 0.8, 0.2);
+    r.per_view = {{"000", r.metrics}, {"001", r.metrics}};
+    r.method_info = {{"train_seconds", train_s}, {"render_seconds", 0.5}, {"peak_rss_mb", 300.0}, {"num_gaussians", 1000}};
+    if (m.rfind("weathergs", 0) == 0) r.method_info["filter_seconds"] = 2.0;
+    if (m == "weathergs") r.method_info["detect_seconds"] = 1.0;
+    rs.push_back({m + scene + w + std::to_string(rs.size()), r});
+  };
+  // Rain comes first in the files; Table I is still snow.
+  add("oracle", "pool", "rain", 40, 100);
+  add("3dgs", "pool", "rain", 20, 100);
+  add("3dgs", "pool", "rain", 22, 120);  // a second seed
+  add("weathergs", "pool", "rain", 24, 100);
+  add("weathergs", "pool", "snow", 26, 100);
+  add("3dgs", "pool", "snow", 21, 100);
+  add("weathergs-no-led", "pool", "rain", 23, 100);
+  add("weathergs-no-led", "pool", "snow", 25, 100);
+  add("weathergs-no-aef", "pool", "rain", 22, 100);  // lacks snow: no ablation average
+  const PaperTables t = build_paper_tables(rs);
+  ASSERT_EQ(t.quality.size(), 2u);
+  EXPECT_EQ(t.quality[0].title, "Table I: Snow");
+  EXPECT_EQ(t.quality[1].title, "Table II: Rain");
+  const LeaderboardTable& rain = t.quality[1];
+  EXPECT_EQ(rain.methods.back(), "oracle");  // reference lines last
+  EXPECT_TRUE(rain.reference.back());
+  EXPECT_DOUBLE_EQ(rain.cells[0][0].psnr, 21.0);  // 3dgs: two seeds averaged
+  EXPECT_EQ(t.ablation_variants, (std::vector<std::string>{"pool_rain", "pool_snow"}));
+  ASSERT_EQ(t.ablation.methods, (std::vector<std::string>{"weathergs-no-aef", "weathergs-no-led", "weathergs"}));
+  EXPECT_EQ(t.ablation.average[0].n, 0);
+  EXPECT_DOUBLE_EQ(t.ablation.average[1].psnr, 24.0);
+  EXPECT_DOUBLE_EQ(t.ablation.average[2].psnr, 25.0);
+  ASSERT_EQ(t.cost.back().method, "oracle");
+  auto row = [&](const std::string& m) {
+    for (const CostRow& c : t.cost)
+      if (c.method == m) return c;
+    ADD_FAILURE() << "no cost row " << m;
+    return CostRow{};
+  };
+  const CostRow gs3 = row("3dgs");
+  EXPECT_EQ(gs3.runs, 3);
+  EXPECT_NEAR(gs3.train_seconds, 320.0 / 3, 1e-9);
+  EXPECT_DOUBLE_EQ(gs3.render_ms_per_view, 250.0);
+  EXPECT_DOUBLE_EQ(gs3.restoration_seconds, 0.0);
+  EXPECT_DOUBLE_EQ(row("weathergs").restoration_seconds, 3.0);
+  EXPECT_DOUBLE_EQ(row("weathergs-no-led").restoration_seconds, 2.0);
+  const std::string md = render_paper_tables(t, TableFormat::kMarkdown);
+  EXPECT_NE(md.find("## Table III: ablation, mean over all 2 variants"), std::string::npos) << md;
+  EXPECT_NE(md.find("## Table IV: computational cost"), std::string::npos) << md;
+  // The oracle's 40 dB is the best number but a reference line: shown, never bold.
+  EXPECT_NE(md.find("| oracle (reference) | 40.00 |"), std::string::npos) << md;
+  EXPECT_EQ(md.find("**40.00**"), std::string::npos) << md;
+  EXPECT_NE(md.find("**24.00**"), std::string::npos) << md;
+  for (TableFormat f : {TableFormat::kCsv, TableFormat::kLatex, TableFormat::kHtml}) {
+    const std::string s = render_paper_tables(t, f);
+    EXPECT_NE(s.find("weathergs-no-led"), std::string::npos);
+    EXPECT_NE(s.find(f == TableFormat::kCsv ? "train_seconds" : "Table IV"), std::string::npos) << s;
+  }
+  // The ablation spans weathers, so its protocols must agree across them.
+  rs[7].results.protocol.quantize_uint8 = false;
+  EXPECT_THROW(build_paper_tables(rs), InputError);
 }
 
 TEST(CheckTest, PassesWithinToleranceFailsBeyond) {

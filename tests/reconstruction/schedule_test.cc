@@ -19,8 +19,9 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
   const TrainOptions e = o.effective();
   EXPECT_EQ(e.densify_from, 50);
   EXPECT_EQ(e.densify_until, 1500);
-  EXPECT_EQ(e.densification_interval, 10);
-  EXPECT_EQ(e.opacity_reset_interval, 300);
+  // Not scaled: new Gaussians get the reference's 100 iterations to settle before the next step.
+  EXPECT_EQ(e.densification_interval, 100);
+  EXPECT_EQ(e.opacity_reset_interval, 3000);
   EXPECT_EQ(e.sh_degree_interval, 100);
   // The last reset (the last multiple of the interval below densify_until) leaves > half the run.
   for (int iterations : {200, 700, 3000, 7000, 29999}) {
@@ -32,8 +33,13 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
   // Short runs: at least 30 densification steps between resets (at 150 iterations a plain scaling
   // reset every 15 iterations and pruning emptied the model), so no reset at all here.
   o.iterations = 150;
-  EXPECT_EQ(o.effective().opacity_reset_interval, 300);
+  EXPECT_EQ(o.effective().opacity_reset_interval, 3000);
   EXPECT_GT(o.effective().opacity_reset_interval, o.effective().densify_until);
+  // A densification interval set by hand is kept and sets the reset floor.
+  o.densification_interval = 10;
+  EXPECT_EQ(o.effective().densification_interval, 10);
+  EXPECT_EQ(o.effective().opacity_reset_interval, 300);
+  o.densification_interval = TrainOptions().densification_interval;
   o.iterations = 30000;
   EXPECT_EQ(o.effective().to_json(), o.to_json());
   o.iterations = 3000;

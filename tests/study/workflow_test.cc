@@ -33,6 +33,14 @@ TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
   const std::string md = read_file(out + "/leaderboard.md");
   for (const char* m : {"3dgs", "oracle"}) EXPECT_NE(md.find(m), std::string::npos) << md;
   EXPECT_TRUE(fs::exists(out + "/leaderboard.html"));
+  const std::string tables = read_file(out + "/tables.md");  // leaderboard --paper
+  EXPECT_NE(tables.find("## Table I: Rain"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("| oracle (reference) |"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("computational cost"), std::string::npos) << tables;
+  // Each cell's output reaches the terminal tagged with the cell, trainer progress included.
+  const std::string log1 = read_file(tmp / "1.log");
+  EXPECT_NE(log1.find("[pool_rain 3dgs seed1] "), std::string::npos) << log1;
+  EXPECT_NE(read_file(out + "/logs/reconstruct/pool_rain_3dgs_seed1.log").find("/150"), std::string::npos);
   const evaluator::Results r3 = evaluator::read_results(out + "/runs/pool_rain/3dgs/seed1/results.json");
   const evaluator::Results ro = evaluator::read_results(out + "/runs/pool_rain/oracle/seed1/results.json");
   std::printf("tiny pool_rain, 150 iterations: 3dgs %.2f dB, oracle %.2f dB\n", r3.metrics.psnr, ro.metrics.psnr);

@@ -1,0 +1,284 @@
+#include "evaluator/paper_tables.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+namespace weathergs::evaluator {
+
+bool is_reference_method(const std::string& method) { return method == "oracle" || method == "gt-masks"; }
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Table III's rows in the paper's order: w/o AEF, w/o LED, full.
+const char* kAblationMethods[3] = {"weathergs-no-aef", "weathergs-no-led", "weathergs"};
+
+std::string variant_of(const Results& r) {
+  const std::string scene = r.scene.empty() ? r.dataset : r.scene;
+  return r.weather.empty() ? scene : scene + "_" + r.weather;
+}
+
+// Competitors first (order of appearance), reference lines last; cells and averages follow.
+void move_references_last(LeaderboardTable& t) {
+  std::vector<size_t> order(t.methods.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_partition(order.begin(), order.end(), [&](size_t m) { return !is_reference_method(t.methods[m]); });
+  LeaderboardTable o = t;
+  o.reference.assign(order.size(), false);
+  for (size_t k = 0; k < order.size(); ++k) {
+    o.methods[k] = t.methods[order[k]];
+    o.cells[k] = t.cells[order[k]];
+    o.average[k] = t.average[order[k]];
+    o.reference[k] = is_reference_method(o.methods[k]);
+  }
+  t = std::move(o);
+}
+
+int weather_rank(const std::string& w) { return w == "snow" ? 0 : w == "rain" ? 1 : 2; }
+
+const char* kRoman[] = {"I", "II", "III", "IV", "V", "VI", "VII", "VIII"};
+
+double mean_of(const std::vector<double>& x) {
+  if (x.empty()) return kNaN;
+  return std::accumulate(x.begin(), x.end(), 0.0) / double(x.size());
+}
+
+double std_of(const std::vector<double>& x) {
+  if (x.size() < 2) return 0;
+  const double m = mean_of(x);
+  double s = 0;
+  for (double v : x) s += (v - m) * (v - m);
+  return std::sqrt(s / double(x.size()));
+}
+
+// A number of method_info, or NaN when absent or not a number.
+double info_number(const Json& info, const char* key) {
+  if (!info.is_object() || !info.contains(key) || !info[key].is_number()) return kNaN;
+  return info[key].get<double>();
+}
+
+}  // namespace
+
+PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
+  PaperTables out;
+  out.quality = build_leaderboard(results);
+  std::stable_sort(out.quality.begin(), out.quality.end(), [](const LeaderboardTable& a, const LeaderboardTable& b) {
+    return weather_rank(a.weather) < weather_rank(b.weather);
+  });
+  for (size_t i = 0; i < out.quality.size(); ++i) {
+    LeaderboardTable& t = out.quality[i];
+    std::string w = t.weather.empty() ? "unspecified weather" : t.weather;
+    w[0] = char(std::toupper(static_cast<unsigned char>(w[0])));
+    t.title = std::string("Table ") + kRoman[std::min<size_t>(i, 7)] + ": " + w;
+    move_references_last(t);
+  }
+  const std::string table3 = std::string("Table ") + kRoman[std::min<size_t>(out.quality.size(), 7)];
+
+  // Table III: every variant any result names; a method's mean over variants of its per-variant
+  // means (seeds averaged first), only when it ran on every variant.
+  std::vector<std::string> variants;
+  for (const auto& lr : results) {
+    const std::string v = variant_of(lr.results);
+    if (std::find(variants.begin(), variants.end(), v) == variants.end()) variants.push_back(v);
+  }
+  out.ablation_variants = variants;
+  LeaderboardTable& a = out.ablation;
+  a.title = table3 + ": ablation, mean over all " + std::to_string(variants.size()) + " variants";
+  a.weather = "all";
+  a.average_label = "All variants";
+  a.average_note = "All variants: the mean over " + std::to_string(variants.size()) +
+                   " variants of each variant's mean over seeds, only for methods with every variant.";
+  a.protocol = out.quality.empty() ? Protocol{} : out.quality.front().protocol;
+  for (const char* m : kAblationMethods) {
+    std::map<std::string, std::vector<const Results*>> per_variant;
+    for (const auto& lr : results) {
+      if (lr.results.method != m) continue;
+      // build_leaderboard checked each weather; this table spans weathers.
+      if (!(lr.results.protocol == a.protocol))
+        throw InputError(lr.path, "protocol differs from the other weathers' (" + lr.results.protocol.to_string() +
+                                      " vs " + a.protocol.to_string() + "): the ablation averages over all variants");
+      per_variant[variant_of(lr.results)].push_back(&lr.results);
+    }
+    if (per_variant.empty()) continue;
+    CellStats avg;
+    bool complete = per_variant.size() == variants.size(), lp = true;
+    if (complete) {
+      for (const auto& [v, rs] : per_variant) {
+        double p = 0, s = 0, l = 0;
+        for (const Results* r : rs) {
+          p += r->metrics.psnr;
+          s += r->metrics.ssim;
+          if (r->metrics.lpips) l += *r->metrics.lpips; else lp = false;
+        }
+        const double n = double(rs.size());
+        avg.psnr += p / n; avg.ssim += s / n; avg.lpips += l / n;
+      }
+      const double k = double(variants.size());
+      avg.n = 1;
+      avg.psnr /= k; avg.ssim /= k; avg.lpips /= k;
+      avg.has_lpips = lp;
+    }
+    a.methods.push_back(m);
+    a.cells.emplace_back();
+    a.average.push_back(avg);
+  }
+  a.reference.assign(a.methods.size(), false);
+
+  // Table IV: cost per method, in the order of the quality tables' rows.
+  std::vector<std::string> methods;
+  for (const auto& t : out.quality)
+    for (const auto& m : t.methods)
+      if (std::find(methods.begin(), methods.end(), m) == methods.end()) methods.push_back(m);
+  std::stable_partition(methods.begin(), methods.end(), [](const std::string& m) { return !is_reference_method(m); });
+  for (const std::string& m : methods) {
+    CostRow row;
+    row.method = m;
+    row.reference = is_reference_method(m);
+    std::vector<double> train, restore, render, rss, gaussians;
+    for (const auto& lr : results) {
+      if (lr.results.method != m) continue;
+      ++row.runs;
+      const Json& info = lr.results.method_info;
+      auto push = [](std::vector<double>& v, double x) { if (std::isfinite(x)) v.push_back(x); };
+      push(train, info_number(info, "train_seconds"));
+      const double f = info_number(info, "filter_seconds"), d = info_number(info, "detect_seconds");
+      push(restore, (std::isfinite(f) ? f : 0) + (std::isfinite(d) ? d : 0));
+      const double views = double(lr.results.per_view.size());
+      const double rs = info_number(info, "render_seconds");
+      if (views > 0) push(render, 1000 * rs / views);
+      push(rss, info_number(info, "peak_rss_mb"));
+      push(gaussians, info_number(info, "num_gaussians"));
+    }
+    row.train_seconds = mean_of(train);
+    row.train_seconds_std = std_of(train);
+    row.restoration_seconds = mean_of(restore);
+    row.render_ms_per_view = mean_of(render);
+    row.peak_rss_mb = mean_of(rss);
+    row.gaussians = mean_of(gaussians);
+    out.cost.push_back(row);
+  }
+  return out;
+}
+
+namespace {
+
+std::string fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "";
+  std::ostringstream o;
+  o.setf(std::ios::fixed);
+  o.precision(decimals);
+  o << v;
+  return o.str();
+}
+
+struct CostColumn {
+  const char* title;
+  int decimals;
+  double CostRow::*field;
+};
+const CostColumn kCostColumns[] = {{"Training (s)", 0, &CostRow::train_seconds},
+                                   {"AEF + LED (s)", 1, &CostRow::restoration_seconds},
+                                   {"Render (ms/view)", 1, &CostRow::render_ms_per_view},
+                                   {"Peak memory (MB)", 0, &CostRow::peak_rss_mb},
+                                   {"Gaussians", 0, &CostRow::gaussians}};
+
+std::string cost_cell(const CostRow& r, const CostColumn& c, const char* pm) {
+  std::string s = fixed(r.*(c.field), c.decimals);
+  if (!s.empty() && c.field == &CostRow::train_seconds && r.runs > 1) s += pm + fixed(r.train_seconds_std, 0);
+  return s;
+}
+
+std::string cost_label(const CostRow& r) { return r.reference ? r.method + " (reference)" : r.method; }
+
+const char* kCostNote =
+    "Mean over each method's runs (all variants and seeds; training time with its standard deviation). "
+    "Training: 3DGS optimisation only; AEF + LED: the particle filter and the lens detector before it; "
+    "peak memory: the training process's peak resident set.";
+
+std::string render_cost(const std::vector<CostRow>& rows, const std::string& title, TableFormat format) {
+  std::ostringstream o;
+  switch (format) {
+    case TableFormat::kMarkdown:
+      o << "## " << title << "\n\n| Method | Runs |";
+      for (const auto& c : kCostColumns) o << " " << c.title << " |";
+      o << "\n|---|---:|";
+      for (size_t i = 0; i < std::size(kCostColumns); ++i) o << "---:|";
+      o << "\n";
+      for (const auto& r : rows) {
+        o << "| " << cost_label(r) << " | " << r.runs << " |";
+        for (const auto& c : kCostColumns) {
+          const std::string s = cost_cell(r, c, " ± ");
+          o << " " << (s.empty() ? "–" : s) << " |";
+        }
+        o << "\n";
+      }
+      o << "\n" << kCostNote << "\n\n";
+      break;
+    case TableFormat::kCsv:
+      o << "method,runs,train_seconds,train_seconds_std,restoration_seconds,render_ms_per_view,peak_rss_mb,gaussians\n";
+      for (const auto& r : rows)
+        o << csv_escape(r.method) << "," << r.runs << "," << fixed(r.train_seconds, 3) << ","
+          << fixed(r.train_seconds_std, 3) << "," << fixed(r.restoration_seconds, 3) << ","
+          << fixed(r.render_ms_per_view, 3) << "," << fixed(r.peak_rss_mb, 1) << "," << fixed(r.gaussians, 0) << "\n";
+      break;
+    case TableFormat::kLatex:
+      o << "% " << title << ". " << kCostNote << "\n";
+      o << "\\begin{table}[t]\n\\centering\n\\caption{" << latex_escape(title) << "}\n\\begin{tabular}{lr"
+        << std::string(std::size(kCostColumns), 'r') << "}\n\\toprule\nMethod & Runs";
+      for (const auto& c : kCostColumns) o << " & " << latex_escape(c.title);
+      o << " \\\\\n\\midrule\n";
+      for (const auto& r : rows) {
+        o << latex_escape(cost_label(r)) << " & " << r.runs;
+        for (const auto& c : kCostColumns) {
+          const std::string s = cost_cell(r, c, "$\\pm$");
+          o << " & " << (s.empty() ? "--" : s);
+        }
+        o << " \\\\\n";
+      }
+      o << "\\bottomrule\n\\end{tabular}\n\\end{table}\n\n";
+      break;
+    case TableFormat::kHtml:
+      o << "<h2>" << html_escape(title) << "</h2>\n<table>\n<thead>\n<tr><th>Method</th><th>Runs</th>";
+      for (const auto& c : kCostColumns) o << "<th>" << html_escape(c.title) << "</th>";
+      o << "</tr>\n</thead>\n<tbody>\n";
+      for (const auto& r : rows) {
+        o << "<tr><td class=\"method\">" << html_escape(cost_label(r)) << "</td><td>" << r.runs << "</td>";
+        for (const auto& c : kCostColumns) {
+          const std::string s = cost_cell(r, c, " &plusmn; ");
+          o << "<td>" << (s.empty() ? "&ndash;" : s) << "</td>";
+        }
+        o << "</tr>\n";
+      }
+      o << "</tbody>\n</table>\n<p class=\"note\">" << html_escape(kCostNote) << "</p>\n";
+      break;
+  }
+  return o.str();
+}
+
+}  // namespace
+
+std::string render_paper_tables(const PaperTables& t, TableFormat format) {
+  std::string o = document_begin(format, "WeatherGS benchmark: the paper's tables");
+  auto separate = [&] { if (format == TableFormat::kCsv && !o.empty()) o += "\n"; };
+  for (const auto& q : t.quality) {
+    separate();
+    o += render_table(q, format, true);
+  }
+  const std::string table4 = std::string("Table ") + kRoman[std::min<size_t>(t.quality.size() + 1, 7)] +
+                             ": computational cost";
+  if (!t.ablation.methods.empty()) {
+    separate();
+    o += render_table(t.ablation, format, true);
+  } else if (format == TableFormat::kMarkdown) {
+    o += "(No ablation table: no results of weathergs-no-aef, weathergs-no-led or weathergs.)\n\n";
+  }
+  separate();
+  o += render_cost(t.cost, table4, format);
+  return o + document_end(format);
+}
+
+}  // namespace weathergs::evaluator
