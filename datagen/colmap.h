@@ -29,6 +29,9 @@ ModelStats analyze_model(const std::string& model_dir, const ColmapOptions& opti
 struct TriangulationResult {
   ModelStats stats;
   double seconds = 0;
+  // COLMAP triangulated nothing (it aborts then, see triangulate_known_poses): the model written has
+  // the known poses and no points.
+  bool no_points = false;
 };
 
 // Known poses: SIFT features of every view in image_dir (<name>.png), exhaustive matching, then

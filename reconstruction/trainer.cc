@@ -134,11 +134,17 @@ TrainOptions TrainOptions::effective() const {
   };
   e.densify_from = scaled(densify_from, ref.densify_from, 0);
   e.densify_until = scaled(densify_until, ref.densify_until, 1);
-  // densification_interval is not scaled: the 100 iterations between two densifications are the
-  // time a split or cloned Gaussian gets to settle before it is judged again, whatever the run
-  // length. Scaled (to 10 at 2000 iterations), copies that had not settled were split again at the
-  // next step; on heavy rain (pool_rain quick, 186 points) that compounded to 589k Gaussians by
-  // iteration 1000 (docs/reconstruction.md, "Schedule for short runs").
+  // densification_interval is not scaled below the reference's 100 iterations: that is the time a
+  // split or cloned Gaussian gets to settle before it is judged again, whatever the run length.
+  // Scaled (to 10 at 2000 iterations), copies that had not settled were split again at the next
+  // step; on heavy rain (pool_rain quick, 186 points) that compounded to 589k Gaussians by iteration
+  // 1000. Only runs too short for kMinDensificationSteps steps at 100 densify more often, so that
+  // every run can still grow from a sparse SfM cloud (docs/reconstruction.md).
+  constexpr int kMinDensificationSteps = 8;
+  if (densification_interval == ref.densification_interval) {
+    const int window = std::max(1, e.densify_until - e.densify_from);
+    e.densification_interval = std::max(1, std::min(densification_interval, window / kMinDensificationSteps));
+  }
   // At least 30 densification steps between two resets, as in the reference (3000 / 100): a plain
   // scaling reset every few densifications, the opacities never recovered and pruning emptied the
   // model.

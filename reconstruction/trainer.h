@@ -52,7 +52,8 @@ struct TrainOptions {
   // on a reset. kScaled (default) scales densify_from, densify_until and sh_degree_interval by
   // s = iterations / 30000 (when s < 1), so densification happens in the first half and the second
   // half recovers. densification_interval keeps the reference's 100 (the time a new Gaussian gets
-  // to settle; scaled to 10 it ran away on heavy weather), and the reset interval keeps at least
+  // to settle; scaled to 10 it ran away on heavy weather) unless that leaves fewer than 8
+  // densification steps (runs under ~1600 iterations), and the reset interval keeps at least
   // the reference's 30 densification steps per reset, so runs up to 6000 iterations never reset.
   // s >= 1 leaves the reference's. Only fields still at their reference value are changed; a value
   // set by hand is kept (docs/reconstruction.md, "Schedule for short runs").

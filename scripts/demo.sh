@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The demo behind `make demo`: the benchmark's main job, small. Generates the tiny profile of pool in
+# The demo behind `make demo`: the benchmark's main job, small. Generates the quick profile of pool in
 # snow and in rain (Blender + the weather generator + COLMAP), reconstructs each with vanilla 3DGS,
 # WeatherGS and the oracle (3DGS on the clean images) through the Snakemake workflow, scores every
 # run against the clean ground truth and prints the paper's tables (docs/study.md).
@@ -9,12 +9,13 @@ WGS=$(realpath "${1:-build/apps/weathergs}")
 OUT=$(realpath -m "${2:-demo_out}")
 ITERATIONS=${DEMO_ITERATIONS:-1000}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
+PROFILE=${DEMO_PROFILE:-quick}
 VARIANTS="[pool_snow,pool_rain]"
 METHODS="[3dgs,weathergs,oracle]"
 
 cat <<EOF
 weathergs demo: can 3D reconstruction see through the weather?
-  1. generate: Blender renders the procedural 'pool' scene (tiny profile), the weather generator adds
+  1. generate: Blender renders the procedural 'pool' scene ($PROFILE profile: 16 views of 300x200), the weather generator adds
      falling snow or rain and drops on the lens, COLMAP triangulates SfM points. The clean renders
      are the ground truth.
   2. reconstruct, per variant, with $ITERATIONS iterations each:
@@ -26,8 +27,9 @@ Workflow: workflow/Snakefile (Snakemake; each line below is tagged with its cell
 EOF
 start=$(date +%s)
 cd "$ROOT"
-USER=${USER:-weathergs} snakemake -s workflow/Snakefile --cores 2 --config weathergs="$WGS" \
-  scenes="$ROOT/scenes" out="$OUT" profile=tiny iterations="$ITERATIONS" threads=1 \
+mkdir -p "$OUT"
+USER=${USER:-weathergs} snakemake -s workflow/Snakefile --directory "$OUT" --cores 2 --config weathergs="$WGS" \
+  scenes="$ROOT/scenes" out="$OUT" profile="$PROFILE" iterations="$ITERATIONS" threads=1 \
   "variants=$VARIANTS" "methods=$METHODS" "seeds=[0]"
 echo
 cat "$OUT/tables.md"

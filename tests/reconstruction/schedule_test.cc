@@ -33,8 +33,15 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
   // Short runs: at least 30 densification steps between resets (at 150 iterations a plain scaling
   // reset every 15 iterations and pruning emptied the model), so no reset at all here.
   o.iterations = 150;
-  EXPECT_EQ(o.effective().opacity_reset_interval, 3000);
+  EXPECT_EQ(o.effective().densification_interval, 9);  // (75 - 2) / 8
+  EXPECT_EQ(o.effective().opacity_reset_interval, 270);
   EXPECT_GT(o.effective().opacity_reset_interval, o.effective().densify_until);
+  // Runs too short for 8 steps at 100 densify 8 times: 700 iterations densify 12..350 every 42.
+  o.iterations = 700;
+  EXPECT_EQ(o.effective().densification_interval, 42);
+  o.iterations = 2000;
+  EXPECT_EQ(o.effective().densification_interval, 100);
+  o.iterations = 150;
   // A densification interval set by hand is kept and sets the reset floor.
   o.densification_interval = 10;
   EXPECT_EQ(o.effective().densification_interval, 10);
