@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <sstream>
 
@@ -108,6 +109,7 @@ Json TrainOptions::to_json() const {
               {"max_gaussians", max_gaussians},
               {"background", {background[0], background[1], background[2]}},
               {"random_init", to_string(random_init)},
+              {"robust", to_string(robust)},
               {"random_init_count", random_init_count},
               {"random_init_near_m", random_init_near_m},
               {"random_init_far_m", random_init_far_m}};
@@ -115,6 +117,10 @@ Json TrainOptions::to_json() const {
 
 const char* to_string(TrainOptions::RandomInit r) {
   return r == TrainOptions::RandomInit::kFrustum ? "frustum" : "photo";
+}
+
+const char* to_string(TrainOptions::Robust r) {
+  return r == TrainOptions::Robust::kRobustFilter ? "robust_filter" : "none";
 }
 
 const char* to_string(TrainOptions::Schedule s) {
@@ -125,10 +131,13 @@ TrainOptions TrainOptions::effective() const {
   constexpr int kReferenceIterations = 30000;
   constexpr int kResetsPerDensification = 30;  // reference: reset every 3000, densify every 100
   TrainOptions e = *this;
+  const TrainOptions ref;
+  // Robust runs never reset opacity (the reference's robust loss skips it), unless set by hand.
+  if (robust != Robust::kNone && opacity_reset_interval == ref.opacity_reset_interval)
+    e.opacity_reset_interval = std::numeric_limits<int>::max();
   if (schedule != Schedule::kScaled || iterations >= kReferenceIterations) return e;
   const double s = double(iterations) / kReferenceIterations;
   // Only fields still at the reference's value are scaled: a value set by hand is taken as given.
-  const TrainOptions ref;
   auto scaled = [&](int v, int reference, int floor) {
     return v == reference ? std::max(floor, int(std::lround(v * s))) : v;
   };
@@ -148,8 +157,9 @@ TrainOptions TrainOptions::effective() const {
   // At least 30 densification steps between two resets, as in the reference (3000 / 100): a plain
   // scaling reset every few densifications, the opacities never recovered and pruning emptied the
   // model.
-  e.opacity_reset_interval = scaled(opacity_reset_interval, ref.opacity_reset_interval,
-                                    kResetsPerDensification * e.densification_interval);
+  if (robust == Robust::kNone)
+    e.opacity_reset_interval = scaled(opacity_reset_interval, ref.opacity_reset_interval,
+                                      kResetsPerDensification * e.densification_interval);
   e.sh_degree_interval = scaled(sh_degree_interval, ref.sh_degree_interval, 1);
   return e;
 }
@@ -189,6 +199,7 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.random_init = r.get_enum_or("random_init", o.random_init,
                                  {RandomInit::kFrustum, RandomInit::kPhotoConsistent});
   o.random_init_count = r.get_or("random_init_count", o.random_init_count);
+  o.robust = r.get_enum_or("robust", o.robust, {Robust::kNone, Robust::kRobustFilter});
   o.random_init_near_m = r.get_or("random_init_near_m", o.random_init_near_m);
   o.random_init_far_m = r.get_or("random_init_far_m", o.random_init_far_m);
   r.finish();
@@ -297,9 +308,15 @@ IterationStats Trainer::step() {
   rs.sh_degree = sh_degree_;
   for (int c = 0; c < 3; ++c) rs.background[c] = float(options_.background[c]);
   rasterize_forward(g_, cam, rs, &state_);
-  const LossValue<float> lv = photometric_loss<float>(state_.image, view.rgb, view.invalid.empty() ? nullptr : &view.invalid,
-                                                      view.camera.width, view.camera.height,
-                                                      float(options_.lambda_dssim), &v_image_);
+  const std::vector<uint8_t>* invalid = view.invalid.empty() ? nullptr : &view.invalid;
+  if (options_.robust == TrainOptions::Robust::kRobustFilter) {
+    if (view.invalid.empty()) invalid_.assign(size_t(view.camera.width) * view.camera.height, 0);
+    else invalid_ = view.invalid;
+    robust_mask_.exclude(state_.image, view.rgb, view.camera.width, view.camera.height, it, options_.seed, &invalid_);
+    invalid = &invalid_;
+  }
+  const LossValue<float> lv = photometric_loss<float>(state_.image, view.rgb, invalid, view.camera.width,
+                                                      view.camera.height, float(options_.lambda_dssim), &v_image_);
   if (!std::isfinite(lv.loss)) {
     std::ostringstream s;
     s << "training diverged at iteration " << it << ": non-finite loss (" << lv.loss << ") on view '"
@@ -314,6 +331,9 @@ IterationStats Trainer::step() {
   stats.loss = lv.loss;
   stats.psnr = psnr_from_mse(lv.mse);
   bool skip_adam = false;
+  // The reference updates its error statistics with the running densification statistics only.
+  if (options_.robust == TrainOptions::Robust::kRobustFilter && it < options_.densify_until)
+    robust_mask_.update(state_.image, view.rgb, view.camera.width, view.camera.height);
   if (it < options_.densify_until) {
     const int64_t n = int64_t(g_.size());
     for (int64_t i = 0; i < n; ++i) {
@@ -496,10 +516,13 @@ void Trainer::densify_and_prune(bool prune_large) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Checkpoints: "WGSCKPT1", uint64 JSON length, JSON header, then the float arrays in a fixed order.
+// Checkpoints: "WGSCKPT2", uint64 JSON length, JSON header, then the float arrays in a fixed order,
+// the int32 view counts, and the robust mask's histogram (doubles; robust runs only). Format 1 had
+// no robust state.
 
 namespace {
-constexpr char kCheckpointMagic[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '1'};
+constexpr char kCheckpointMagic[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '2'};
+constexpr char kCheckpointMagicV1[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '1'};
 }
 
 void Trainer::save_checkpoint(const std::string& path, double train_seconds) const {
@@ -509,6 +532,8 @@ void Trainer::save_checkpoint(const std::string& path, double train_seconds) con
               {"adam_steps", std::vector<int64_t>(adam_steps_.begin(), adam_steps_.end())},
               {"extent", extent_},
               {"train_seconds", train_seconds},
+              {"robust_threshold", robust_mask_.threshold()},
+              {"robust_bins", options_.robust == TrainOptions::Robust::kNone ? 0 : robust_mask_.options().bins},
               {"options", options_.to_json()}};
   const std::string h = header.dump();
   std::string out(kCheckpointMagic, 8);
@@ -524,11 +549,17 @@ void Trainer::save_checkpoint(const std::string& path, double train_seconds) con
   put(grad_accum_);
   put(max_radii_);
   out.append(reinterpret_cast<const char*>(grad_count_.data()), grad_count_.size() * sizeof(int32_t));
+  if (options_.robust != TrainOptions::Robust::kNone) {
+    const std::vector<double>& h = robust_mask_.histogram();
+    out.append(reinterpret_cast<const char*>(h.data()), h.size() * sizeof(double));
+  }
   write_file_atomic(path, out);
 }
 
 double Trainer::load_checkpoint(const std::string& path) {
   const std::string bytes = read_file(path);
+  if (bytes.size() >= 8 && std::memcmp(bytes.data(), kCheckpointMagicV1, 8) == 0)
+    throw InputError(path, "checkpoint of an older weathergs (format 1); start the run over with --force");
   if (bytes.size() < 16 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0)
     throw InputError(path, "not a weathergs training checkpoint (bad magic)");
   uint64_t len;
@@ -553,9 +584,16 @@ double Trainer::load_checkpoint(const std::string& path) {
   for (int k = 0; k < 6; ++k) adam_steps[k] = steps.at(k).as<int64_t>();
   const double extent = h.get<double>("extent");
   const double seconds = h.get<double>("train_seconds");
+  const double robust_threshold = h.get<double>("robust_threshold");
+  const size_t robust_bins = h.get<size_t>("robust_bins");
   h.finish();
+  const size_t want_bins = options_.robust == TrainOptions::Robust::kNone ? 0 : size_t(robust_mask_.options().bins);
+  if (robust_bins != want_bins)
+    throw InputError(path, "checkpoint robust_bins = " + std::to_string(robust_bins) + ", expected " +
+                               std::to_string(want_bins));
   const size_t floats_per = 3 + 3 + 4 + 1 + kShFloats;
-  const size_t expected = 16 + len + n * (3 * floats_per + 2) * sizeof(float) + n * sizeof(int32_t);
+  const size_t expected = 16 + len + n * (3 * floats_per + 2) * sizeof(float) + n * sizeof(int32_t) +
+                        robust_bins * sizeof(double);
   if (bytes.size() != expected)
     throw InputError(path, "checkpoint size " + std::to_string(bytes.size()) + " bytes, expected " +
                                std::to_string(expected));
@@ -573,6 +611,12 @@ double Trainer::load_checkpoint(const std::string& path) {
   get(max_radii_, n);
   grad_count_.resize(n);
   std::memcpy(grad_count_.data(), bytes.data() + off, n * sizeof(int32_t));
+  off += n * sizeof(int32_t);
+  if (robust_bins > 0) {
+    std::vector<double> hist(robust_bins);
+    std::memcpy(hist.data(), bytes.data() + off, robust_bins * sizeof(double));
+    robust_mask_.restore(std::move(hist), robust_threshold);
+  }
   iteration_ = iteration;
   sh_degree_ = sh_degree;
   adam_steps_ = adam_steps;

@@ -14,6 +14,7 @@
 #include "reconstruction/gaussians.h"
 #include "reconstruction/loss.h"
 #include "reconstruction/rasterizer.h"
+#include "reconstruction/robust_mask.h"
 
 namespace weathergs::recon {
 
@@ -59,6 +60,11 @@ struct TrainOptions {
   // set by hand is kept (docs/reconstruction.md, "Schedule for short runs").
   enum class Schedule { kReference, kScaled };
   Schedule schedule = Schedule::kScaled;
+  // kRobustFilter: the robust-3dgs baseline's per-pixel distractor mask (reconstruction/robust_mask.h)
+  // is excluded from the loss on top of any given mask, and opacity is never reset (as in the
+  // reference's robust runs; a reset interval set by hand is kept).
+  enum class Robust { kNone, kRobustFilter };
+  Robust robust = Robust::kNone;
   // Without COLMAP points (reconstruction/init_random.h): kPhotoConsistent places each random ray's
   // point where neighbouring train views agree in colour; kFrustum is the plain random cloud.
   enum class RandomInit { kFrustum, kPhotoConsistent };
@@ -75,6 +81,7 @@ struct TrainOptions {
 };
 const char* to_string(TrainOptions::Schedule s);
 const char* to_string(TrainOptions::RandomInit r);
+const char* to_string(TrainOptions::Robust r);
 
 // One training image: camera, sRGB pixels in [0, 1] (H x W x 3) and an optional mask (H x W,
 // nonzero = masked out; empty = all valid).
@@ -139,6 +146,8 @@ class Trainer {
   std::array<int64_t, 6> adam_steps_{};  // per ParamGroup
   std::vector<float> grad_accum_, max_radii_;
   std::vector<int32_t> grad_count_;
+  RobustMask robust_mask_;
+  std::vector<uint8_t> invalid_;  // this iteration's loss mask (view masks + robust exclusions)
   std::vector<float> v_ndc_, v_image_;
   RasterState<float> state_;
   int iteration_ = 0;

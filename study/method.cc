@@ -13,6 +13,7 @@ const char* to_string(Method m) {
     case Method::kWeatherGS: return "weathergs";
     case Method::kWeatherGSNoAef: return "weathergs-no-aef";
     case Method::kWeatherGSNoLed: return "weathergs-no-led";
+    case Method::kRobust3dgs: return "robust-3dgs";
   }
   WGS_CHECK(false);
   return "";
@@ -20,7 +21,7 @@ const char* to_string(Method m) {
 
 std::vector<Method> all_methods() {
   return {Method::k3dgs,     Method::kOracle,         Method::kGtMasks,       Method::kAefTophat,
-          Method::kWeatherGS, Method::kWeatherGSNoAef, Method::kWeatherGSNoLed};
+          Method::kWeatherGS, Method::kWeatherGSNoAef, Method::kWeatherGSNoLed, Method::kRobust3dgs};
 }
 
 Method parse_method(const std::string& name, const std::string& where) {
@@ -43,6 +44,9 @@ std::string method_description(Method m) {
              "views, 3DGS with the LED mask excluded from the loss";
     case Method::kWeatherGSNoAef: return "WeatherGS without the AEF: LED on the raw views, masked 3DGS on the raw images";
     case Method::kWeatherGSNoLed: return "WeatherGS without the LED: AEF (classical top-hat) on every view, then 3DGS";
+    case Method::kRobust3dgs:
+      return "3DGS with the RobustFilter distractor mask (SpotLessSplats' robust baseline: pixels above the running "
+             "70th-percentile error excluded from the loss, annealed), no opacity reset";
   }
   WGS_CHECK(false);
   return "";
@@ -61,6 +65,7 @@ Recipe recipe(Method m) {
     case Method::kWeatherGS: r.particle_filter = r.lens_detector = true; break;
     case Method::kWeatherGSNoAef: r.lens_detector = true; break;
     case Method::kWeatherGSNoLed: r.particle_filter = true; break;
+    case Method::kRobust3dgs: r.robust = true; break;
   }
   return r;
 }

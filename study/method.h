@@ -21,6 +21,7 @@ enum class Method {
                     // 3DGS on the filtered images with the LED mask excluded from the loss
   kWeatherGSNoAef,  // ablation (the paper's Table III): LED on the raw views, 3DGS on the raw images, masked
   kWeatherGSNoLed,  // ablation: AEF only (while the AEF is the classical one, the same recipe as aef-tophat)
+  kRobust3dgs,      // 3DGS with the RobustFilter per-pixel distractor mask (reconstruction/robust_mask.h)
 };
 const char* to_string(Method m);
 std::vector<Method> all_methods();
@@ -35,6 +36,7 @@ struct Recipe {
   bool particle_filter = false;  // train on the classical AEF's restored images (RUN/filtered/)
   bool lens_detector = false;    // exclude the LED's mask (RUN/detected/) from the loss; the LED sees the
                                  // filtered images when particle_filter, else the raw ones
+  bool robust = false;           // the trainer's RobustFilter mask (TrainOptions::Robust::kRobustFilter)
 };
 Recipe recipe(Method m);
 

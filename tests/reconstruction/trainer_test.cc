@@ -208,6 +208,10 @@ TEST(TrainerTest, NanGuardNamesParameterAndStep) {
 // A fake occluder painted into every training image (off-centre: what it hides in one view is
 // seen by others): with the occluder masked out, the scene is
 // recovered without it; without the mask it is baked into the model.
+// robust-3dgs must beat plain 3DGS on the occluded region by a margin well above run-to-run noise
+// (these runs are deterministic; measured +2.75 dB on 2026-11-23, see the printout).
+constexpr double kRobustGainDb = 2.0;
+
 TEST(TrainerTest, MaskedOccluderIsNotReconstructed) {
   Scene s = make_scene(200, 64, 48, 8, 12);
   std::vector<TrainView> clean = s.views, masked = s.views, unmasked = s.views;
@@ -232,7 +236,10 @@ TEST(TrainerTest, MaskedOccluderIsNotReconstructed) {
   const double extent = scene_extent(cameras_of(s.views));
   Trainer tm(masked, point_init(s.truth, 5), o, extent);
   Trainer tu(unmasked, point_init(s.truth, 5), o, extent);
-  while (tm.iteration() < o.iterations) { tm.step(); tu.step(); }
+  TrainOptions ro = o;
+  ro.robust = TrainOptions::Robust::kRobustFilter;  // robust-3dgs: no mask given, it finds its own
+  Trainer tr(unmasked, point_init(s.truth, 5), ro, extent);
+  while (tm.iteration() < o.iterations) { tm.step(); tu.step(); tr.step(); }
   // Scored against the clean images on the occluded region only.
   std::vector<TrainView> region = clean;
   for (auto& v : region) {
@@ -241,11 +248,41 @@ TEST(TrainerTest, MaskedOccluderIsNotReconstructed) {
       for (int x = 6; x < 24; ++x) v.invalid[y * v.camera.width + x] = 0;
   }
   const double psnr_masked = mean_psnr(tm, region), psnr_unmasked = mean_psnr(tu, region);
-  std::printf("occluded region vs clean: masked %.2f dB, unmasked %.2f dB\n", psnr_masked, psnr_unmasked);
+  const double psnr_robust = mean_psnr(tr, region);
+  std::printf("occluded region vs clean: masked %.2f dB, unmasked %.2f dB, robust (no mask) %.2f dB\n", psnr_masked,
+              psnr_unmasked, psnr_robust);
   EXPECT_GT(psnr_masked, 28.0);
-  // Measured 32.8 vs 24.8 dB: multi-view consistency already fights the unmasked occluder, the mask
-  // removes it.
+  // Measured 31.4 vs 23.1 dB (2026-11-23): multi-view consistency already fights the unmasked
+  // occluder, the mask removes it; the robust mask, with no mask given, recovers part (25.8 dB).
   EXPECT_GT(psnr_masked, psnr_unmasked + 5.0);
+  EXPECT_GT(psnr_robust, psnr_unmasked + kRobustGainDb);
+}
+
+// The robust mask's running histogram is part of the checkpoint: a resumed robust run ends where an
+// uninterrupted one does.
+TEST(TrainerTest, RobustRunResumesToTheSameModel) {
+  Scene s = make_scene(120, 48, 36, 4);
+  weathergs::testing::TempDir dir;
+  const double extent = scene_extent(cameras_of(s.views));
+  TrainOptions o = busy_options(40);
+  o.robust = TrainOptions::Robust::kRobustFilter;
+  Trainer full(s.views, point_init(s.truth, 3), o, extent);
+  while (full.iteration() < 40) full.step();
+  {
+    Trainer first(s.views, point_init(s.truth, 3), o, extent);
+    while (first.iteration() < 23) first.step();
+    first.save_checkpoint(dir / "ckpt.bin", 1.0);
+  }
+  Trainer resumed(s.views, point_init(s.truth, 3), o, extent);
+  resumed.load_checkpoint(dir / "ckpt.bin");
+  while (resumed.iteration() < 40) resumed.step();
+  EXPECT_EQ(full.gaussians().position, resumed.gaussians().position);
+  EXPECT_EQ(full.gaussians().sh, resumed.gaussians().sh);
+  // A plain run's checkpoint does not load into a robust trainer (no histogram in it).
+  Trainer plain(s.views, point_init(s.truth, 3), busy_options(40), extent);
+  plain.step();
+  plain.save_checkpoint(dir / "plain.bin", 1.0);
+  EXPECT_THROW(resumed.load_checkpoint(dir / "plain.bin"), InputError);
 }
 
 TEST(PlyTest, RoundTripAndStandardLayout) {
