@@ -10,7 +10,7 @@ namespace {
 
 struct TrainArgs {
   recon::TrainRunOptions run;
-  std::string images = "images", masks = "none", random_init = "photo";
+  std::string images = "images", masks = "none", random_init = "photo", mask_normalization = "valid";
   std::vector<double> background;
   CLI::App* app = nullptr;
 };
@@ -21,6 +21,8 @@ int run_train(TrainArgs& args) {
   o.inputs.masks = recon::parse_train_masks(args.masks, "--masks");
   o.train.random_init = args.random_init == "frustum" ? recon::TrainOptions::RandomInit::kFrustum
                                                       : recon::TrainOptions::RandomInit::kPhotoConsistent;
+  o.train.mask_normalization = args.mask_normalization == "reference" ? recon::MaskNormalization::kReference
+                                                                      : recon::MaskNormalization::kValid;
   if (o.resume) {
     // Start from what the run was trained with; explicitly given flags must agree (checked below
     // through the checkpoint) or extend nothing silently.
@@ -38,6 +40,7 @@ int run_train(TrainArgs& args) {
     if (!given("--random-init-count")) o.train.random_init_count = stored.train.random_init_count;
     if (!given("--random-init")) o.train.random_init = stored.train.random_init;
     if (!given("--max-gaussians")) o.train.max_gaussians = stored.train.max_gaussians;
+    if (!given("--mask-normalization")) o.train.mask_normalization = stored.train.mask_normalization;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
@@ -96,6 +99,10 @@ Command make_train(CLI::App& root) {
                   "Random initialization when the dataset has no COLMAP points: photo (each point at the depth "
                   "where neighbouring views agree) or frustum (uniform in inverse depth, random colours)")
       ->capture_default_str()->check(CLI::IsMember({"photo", "frustum"}));
+  sub->add_option("--mask-normalization", args->mask_normalization,
+                  "Masked loss: valid (means over the valid pixels, masked ones count for nothing) or reference "
+                  "(the WeatherGS release: masked target pixels replaced by the render, means over all pixels)")
+      ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
   sub->add_option("--random-init-count", o.train.random_init_count,
                   "Gaussians for random initialization when the dataset has no COLMAP points")
       ->capture_default_str();

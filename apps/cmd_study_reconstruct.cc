@@ -17,6 +17,7 @@ struct ReconstructArgs {
   bool no_triangulate = false;
   std::string led_weights;
   double led_threshold = 0;
+  std::string mask_normalization = "valid";
   ScoringFlags scoring;
 };
 
@@ -25,6 +26,8 @@ int run(ReconstructArgs& a) {
   o.method = study::parse_method(a.method, "--method");
   o.points = a.no_triangulate ? study::PointsPolicy::kDataset : study::PointsPolicy::kAuto;
   o.scoring = a.scoring.options();
+  o.mask_normalization = a.mask_normalization == "reference" ? recon::MaskNormalization::kReference
+                                                             : recon::MaskNormalization::kValid;
   if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
   if (a.led_threshold > 0) o.led_mask.threshold = a.led_threshold;
   ProgressBar bar("train", o.iterations);
@@ -67,6 +70,11 @@ Command make(CLI::App& root) {
   sub->add_option("--out", a->options.out, "Run folder")->required();
   sub->add_option("--iterations", a->options.iterations, "Training iterations")->capture_default_str();
   sub->add_option("--seed", a->options.seed, "Random seed")->capture_default_str();
+  sub->add_option("--mask-normalization", a->mask_normalization,
+                  "Masked loss (gt-masks, weathergs, weathergs-no-aef, robust-3dgs): valid (means over the valid "
+                  "pixels) or reference (the WeatherGS release: masked target pixels replaced by the render, means "
+                  "over all pixels); docs/reconstruction.md")
+      ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
   sub->add_option("--random-init-count", a->options.random_init_count,
                   "Gaussians of the random initialization (used when there are no SfM points)")
       ->capture_default_str();

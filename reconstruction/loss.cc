@@ -20,6 +20,8 @@ std::vector<double> ssim_window_1d() {
   return w;
 }
 
+const char* to_string(MaskNormalization m) { return m == MaskNormalization::kReference ? "reference" : "valid"; }
+
 double psnr_from_mse(double mse) {
   if (!(mse > 1e-10)) return 100.0;
   return -10.0 * std::log10(mse);
@@ -81,7 +83,7 @@ Workspace<T>& workspace() {
 template <typename T>
 LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>& target,
                               const std::vector<uint8_t>* invalid, int width, int height, T lambda,
-                              std::vector<T>* v_render) {
+                              std::vector<T>* v_render, MaskNormalization normalization) {
   const size_t n = size_t(width) * height;
   WGS_CHECK_EQ(render.size(), n * 3);
   WGS_CHECK_EQ(target.size(), n * 3);
@@ -93,6 +95,11 @@ LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>
   if (v_render) v_render->assign(n * 3, T(0));
   if (valid == 0) return out;
   auto is_valid = [&](size_t i) { return !invalid || !(*invalid)[i]; };
+  // kValid: masked pixels take the target's value in the render and count for nothing.
+  // kReference: masked pixels take the render's value in the target; every centre counts.
+  const bool reference = normalization == MaskNormalization::kReference;
+  auto counts = [&](size_t i) { return reference || is_valid(i); };
+  const int64_t denominator = reference ? int64_t(n) : valid;
 
   const std::vector<double> wd = ssim_window_1d();
   T k[kSsimWindow];
@@ -103,8 +110,9 @@ LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>
   parallel_for(0, 3, [&](int64_t c) {
     auto& p = ws.planes[c];
     for (size_t i = 0; i < n; ++i) {
-      const T y = target[i * 3 + c];
-      const T x = is_valid(i) ? render[i * 3 + c] : y;
+      const T x0 = render[i * 3 + c], y0 = target[i * 3 + c];
+      const T x = is_valid(i) || reference ? x0 : y0;
+      const T y = is_valid(i) || !reference ? y0 : x0;
       p[0][i] = x; p[1][i] = y; p[2][i] = x * x; p[3][i] = y * y; p[4][i] = x * y;
     }
   });
@@ -114,7 +122,7 @@ LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>
   });
   // SSIM map and its partial derivatives (stored over the product planes, which are no longer needed).
   const T c1 = T(kSsimC1), c2 = T(kSsimC2);
-  const T inv_count = T(1) / (T(3) * T(valid));
+  const T inv_count = T(1) / (T(3) * T(denominator));
   const T w_ssim = -lambda * inv_count;  // dL/dS at a valid centre
   std::vector<double> ssim_sum(3, 0.0), l1_sum(3, 0.0), se_sum(3, 0.0);
   parallel_for(0, 3, [&](int64_t c) {
@@ -127,7 +135,7 @@ LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>
       const T A = T(2) * mx * my + c1, B = T(2) * sxy + c2;
       const T C = mx * mx + my * my + c1, D = sxx + syy + c2;
       const T s = (A * B) / (C * D);
-      const bool ok = is_valid(i);
+      const bool ok = counts(i);
       if (ok) {
         s_sum += double(s);
         const T d = p[0][i] - p[1][i];
@@ -147,7 +155,7 @@ LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>
     l1_sum[c] = a_sum;
     se_sum[c] = e_sum;
   });
-  const double count = 3.0 * double(valid);
+  const double count = 3.0 * double(denominator);
   out.ssim = T((ssim_sum[0] + ssim_sum[1] + ssim_sum[2]) / count);
   out.l1 = T((l1_sum[0] + l1_sum[1] + l1_sum[2]) / count);
   out.mse = T((se_sum[0] + se_sum[1] + se_sum[2]) / count);
@@ -162,8 +170,8 @@ LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>
     auto& b = ws.blurred[c];
     auto& p = ws.planes[c];
     for (size_t i = 0; i < n; ++i) {
-      if (!is_valid(i)) continue;  // composited with the target: exactly zero gradient
-      const T x = p[0][i], y = p[1][i];
+      if (!counts(i)) continue;  // kValid: composited with the target: exactly zero gradient
+      const T x = p[0][i], y = p[1][i];  // kReference, masked: x == y, so the L1 sign is 0
       const T d = x - y;
       const T sign = d > T(0) ? T(1) : (d < T(0) ? T(-1) : T(0));
       (*v_render)[i * 3 + c] = w_l1 * sign + b[2][i] + T(2) * x * b[3][i] + y * b[4][i];
@@ -178,10 +186,11 @@ T ssim_mean(const std::vector<T>& a, const std::vector<T>& b, int width, int hei
 }
 
 template LossValue<float> photometric_loss<float>(const std::vector<float>&, const std::vector<float>&,
-                                                  const std::vector<uint8_t>*, int, int, float, std::vector<float>*);
+                                                  const std::vector<uint8_t>*, int, int, float, std::vector<float>*,
+                                                  MaskNormalization);
 template LossValue<double> photometric_loss<double>(const std::vector<double>&, const std::vector<double>&,
                                                     const std::vector<uint8_t>*, int, int, double,
-                                                    std::vector<double>*);
+                                                    std::vector<double>*, MaskNormalization);
 template float ssim_mean<float>(const std::vector<float>&, const std::vector<float>&, int, int);
 template double ssim_mean<double>(const std::vector<double>&, const std::vector<double>&, int, int);
 

@@ -9,6 +9,12 @@
 // mask border; there the render's masked pixels are replaced by the target's, so the masked part of
 // the window counts as perfectly matched, carries no information about the render and receives
 // exactly zero gradient. Without a mask this is the reference loss exactly.
+//
+// MaskNormalization::kReference instead follows the WeatherGS release as the issue describes it: the
+// target's masked pixels are replaced by the render (held constant) and both terms are averaged over
+// ALL pixels. Masked pixels then add nothing to L1 but still take part in the SSIM windows of their
+// neighbours and receive an SSIM gradient, and the loss of a heavily masked view is scaled down by
+// its valid fraction. It equals the unmasked loss against that composited target (tested).
 #pragma once
 
 #include <cstdint>
@@ -31,6 +37,9 @@ struct LossValue {
   int64_t valid_pixels = 0;
 };
 
+enum class MaskNormalization { kValid, kReference };
+const char* to_string(MaskNormalization m);  // "valid" | "reference"
+
 // Normalized 1D window of the SSIM (11 taps, sigma 1.5).
 std::vector<double> ssim_window_1d();
 
@@ -40,7 +49,8 @@ std::vector<double> ssim_window_1d();
 template <typename T>
 LossValue<T> photometric_loss(const std::vector<T>& render, const std::vector<T>& target,
                               const std::vector<uint8_t>* invalid, int width, int height, T lambda_dssim,
-                              std::vector<T>* v_render);
+                              std::vector<T>* v_render,
+                              MaskNormalization normalization = MaskNormalization::kValid);
 
 // Mean SSIM of two H x W x 3 images over all pixels (same conventions), for tests and reports.
 template <typename T>

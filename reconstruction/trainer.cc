@@ -110,6 +110,7 @@ Json TrainOptions::to_json() const {
               {"background", {background[0], background[1], background[2]}},
               {"random_init", to_string(random_init)},
               {"robust", to_string(robust)},
+              {"mask_normalization", to_string(mask_normalization)},
               {"random_init_count", random_init_count},
               {"random_init_near_m", random_init_near_m},
               {"random_init_far_m", random_init_far_m}};
@@ -200,6 +201,8 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
                                  {RandomInit::kFrustum, RandomInit::kPhotoConsistent});
   o.random_init_count = r.get_or("random_init_count", o.random_init_count);
   o.robust = r.get_enum_or("robust", o.robust, {Robust::kNone, Robust::kRobustFilter});
+  o.mask_normalization = r.get_enum_or("mask_normalization", o.mask_normalization,
+                                       {MaskNormalization::kValid, MaskNormalization::kReference});
   o.random_init_near_m = r.get_or("random_init_near_m", o.random_init_near_m);
   o.random_init_far_m = r.get_or("random_init_far_m", o.random_init_far_m);
   r.finish();
@@ -316,7 +319,8 @@ IterationStats Trainer::step() {
     invalid = &invalid_;
   }
   const LossValue<float> lv = photometric_loss<float>(state_.image, view.rgb, invalid, view.camera.width,
-                                                      view.camera.height, float(options_.lambda_dssim), &v_image_);
+                                                      view.camera.height, float(options_.lambda_dssim), &v_image_,
+                                                      options_.mask_normalization);
   if (!std::isfinite(lv.loss)) {
     std::ostringstream s;
     s << "training diverged at iteration " << it << ": non-finite loss (" << lv.loss << ") on view '"

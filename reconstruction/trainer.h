@@ -65,6 +65,10 @@ struct TrainOptions {
   // reference's robust runs; a reset interval set by hand is kept).
   enum class Robust { kNone, kRobustFilter };
   Robust robust = Robust::kNone;
+  // How a masked loss is normalised (reconstruction/loss.h): kValid (ours: masked pixels count for
+  // nothing, means over the valid pixels) or kReference (the WeatherGS release: the target's masked
+  // pixels replaced by the render, means over all pixels).
+  MaskNormalization mask_normalization = MaskNormalization::kValid;
   // Without COLMAP points (reconstruction/init_random.h): kPhotoConsistent places each random ray's
   // point where neighbouring train views agree in colour; kFrustum is the plain random cloud.
   enum class RandomInit { kFrustum, kPhotoConsistent };

@@ -124,6 +124,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   t.train.iterations = o.iterations;
   t.train.seed = o.seed;
   t.train.random_init_count = o.random_init_count;
+  t.train.mask_normalization = o.mask_normalization;
   if (r.robust) t.train.robust = recon::TrainOptions::Robust::kRobustFilter;
   const fs::path run_json = run / kModelDir / "run.json";
   bool trained = false;

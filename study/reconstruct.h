@@ -37,6 +37,8 @@ struct ReconstructOptions {
   int iterations = 30000;
   uint64_t seed = 0;
   int random_init_count = 50000;  // Gaussians of the random initialization (when no SfM points)
+  // The masked loss's normalisation (reconstruction/loss.h); matters for methods with loss masks.
+  recon::MaskNormalization mask_normalization = recon::MaskNormalization::kValid;
   int checkpoint_every = 1000;
   bool force = false;
   PointsPolicy points = PointsPolicy::kAuto;

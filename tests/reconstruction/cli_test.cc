@@ -91,6 +91,22 @@ TEST(CliTest, MaskAndImageFolders) {
   EXPECT_EQ(info.get<std::string>("masks_dir"), dir / "masks");
   EXPECT_EQ(info.get<std::string>("images_dir"), dir / "imgs");
   EXPECT_EQ(info.get<std::string>("masks"), "none");
+  EXPECT_EQ(info.child("options").get<std::string>("mask_normalization"), "valid");
+  // The WeatherGS release's normalisation is recorded, kept on --resume, and a model differs from
+  // the default's (the masked loss is not the same loss).
+  ASSERT_EQ(run("train --data " + dir / "data" + " --masks-dir " + dir / "masks" +
+                " --mask-normalization reference --iterations 10 --checkpoint-every 5 --out " + dir / "ref"),
+            0);
+  EXPECT_EQ(JsonReader::from_file(dir / "ref/run.json").child("options").get<std::string>("mask_normalization"),
+            "reference");
+  ASSERT_EQ(run("train --data " + dir / "data" + " --masks-dir " + dir / "masks" + " --iterations 10 --out " + dir / "val"),
+            0);
+  EXPECT_NE(read_file(dir / "ref/point_cloud.ply"), read_file(dir / "val/point_cloud.ply"));
+  const std::string ref_ply = read_file(dir / "ref/point_cloud.ply");
+  ASSERT_EQ(run("train --resume --out " + dir / "ref"), 0);  // the stored normalisation: a no-op
+  EXPECT_EQ(read_file(dir / "ref/point_cloud.ply"), ref_ply);
+  EXPECT_EQ(run("train --resume --mask-normalization valid --out " + dir / "ref"), 2);  // a changed option
+  EXPECT_EQ(run("train --data " + dir / "data" + " --mask-normalization half --out " + dir / "r1"), 2);
   // A folder is never mistaken for a mode, nor a mode for a folder (a folder named "lens" is a folder).
   EXPECT_EQ(run("train --data " + dir / "data" + " --masks " + dir / "masks" + " --out " + dir / "r1"), 2);
   EXPECT_EQ(run("train --data " + dir / "data" + " --masks lens --masks-dir " + dir / "masks" + " --out " + dir / "r1"),

@@ -227,6 +227,30 @@ TEST(GradientTest, MaskedL1SsimLoss) {
       }
     }
   }
+
+  // kReference (the WeatherGS release's normalisation): the same as the unmasked loss against the
+  // target with its masked pixels replaced by the render (held constant), value and gradient, and
+  // that unmasked loss is checked against finite differences above.
+  std::vector<double> composited = target;
+  for (int p = 0; p < w * h; ++p)
+    if (mask[p])
+      for (int c = 0; c < 3; ++c) composited[p * 3 + c] = render[p * 3 + c];
+  std::vector<double> v_ref, v_plain;
+  const LossValue<double> ref =
+      photometric_loss<double>(render, target, &mask, w, h, kLambdaDssim, &v_ref, MaskNormalization::kReference);
+  const LossValue<double> plain = photometric_loss<double>(render, composited, nullptr, w, h, kLambdaDssim, &v_plain);
+  EXPECT_NEAR(ref.loss, plain.loss, 1e-12);
+  ASSERT_EQ(v_ref.size(), v_plain.size());
+  double masked_gradient = 0;
+  for (size_t i = 0; i < v_ref.size(); ++i) {
+    EXPECT_NEAR(v_ref[i], v_plain[i], 1e-12) << i;
+    if (mask[i / 3]) masked_gradient += std::abs(v_ref[i]);
+  }
+  EXPECT_GT(masked_gradient, 0.0) << "masked pixels take part in their neighbours' SSIM windows";
+  // Averaged over all pixels: a lower loss than the valid-pixel normalisation of the same residuals.
+  const LossValue<double> valid = photometric_loss<double>(render, target, &mask, w, h, kLambdaDssim, nullptr);
+  EXPECT_LT(ref.l1, valid.l1);
+  EXPECT_EQ(std::string(to_string(MaskNormalization::kReference)), "reference");
 }
 
 }  // namespace
