@@ -25,17 +25,6 @@ size_t index_of(std::vector<T>& v, const T& x) {
   return v.size() - 1;
 }
 
-// Mean and (population) standard deviation; an infinite PSNR makes the mean +inf and the spread 0.
-void mean_std(const std::vector<double>& x, double& mean, double& sd) {
-  mean = 0;
-  for (double v : x) mean += v;
-  mean /= double(x.size());
-  sd = 0;
-  if (std::isinf(mean)) return;
-  for (double v : x) sd += (v - mean) * (v - mean);
-  sd = std::sqrt(sd / double(x.size()));
-}
-
 CellStats stats(const std::vector<const Results*>& rs) {
   CellStats c;
   c.n = int(rs.size());
@@ -54,6 +43,16 @@ CellStats stats(const std::vector<const Results*>& rs) {
 }
 
 }  // namespace
+
+void mean_std(const std::vector<double>& x, double& mean, double& sd) {
+  mean = 0;
+  for (double v : x) mean += v;
+  mean /= double(x.size());
+  sd = 0;
+  if (std::isinf(mean)) return;
+  for (double v : x) sd += (v - mean) * (v - mean);
+  sd = std::sqrt(sd / double(x.size()));
+}
 
 std::string csv_escape(const std::string& s) {
   if (s.find_first_of(",\"\n") == std::string::npos) return s;

@@ -46,6 +46,10 @@ struct LeaderboardTable {
 std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results);
 std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format);
 
+// Mean and population standard deviation of x (NaN for none); an infinite value (PSNR of identical
+// images) makes the mean +inf and the spread 0.
+void mean_std(const std::vector<double>& x, double& mean, double& sd);
+
 // Pieces of render_leaderboard for documents that add their own tables (evaluator/paper_tables.h).
 std::string render_table(const LeaderboardTable& table, TableFormat format, bool csv_header);
 std::string document_begin(TableFormat format, const std::string& title);

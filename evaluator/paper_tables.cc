@@ -42,19 +42,6 @@ int weather_rank(const std::string& w) { return w == "snow" ? 0 : w == "rain" ? 
 
 const char* kRoman[] = {"I", "II", "III", "IV", "V", "VI", "VII", "VIII"};
 
-double mean_of(const std::vector<double>& x) {
-  if (x.empty()) return kNaN;
-  return std::accumulate(x.begin(), x.end(), 0.0) / double(x.size());
-}
-
-double std_of(const std::vector<double>& x) {
-  if (x.size() < 2) return 0;
-  const double m = mean_of(x);
-  double s = 0;
-  for (double v : x) s += (v - m) * (v - m);
-  return std::sqrt(s / double(x.size()));
-}
-
 // A number of method_info, or NaN when absent or not a number.
 double info_number(const Json& info, const char* key) {
   if (!info.is_object() || !info.contains(key) || !info[key].is_number()) return kNaN;
@@ -153,12 +140,12 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
       push(rss, info_number(info, "peak_rss_mb"));
       push(gaussians, info_number(info, "num_gaussians"));
     }
-    row.train_seconds = mean_of(train);
-    row.train_seconds_std = std_of(train);
-    row.restoration_seconds = mean_of(restore);
-    row.render_ms_per_view = mean_of(render);
-    row.peak_rss_mb = mean_of(rss);
-    row.gaussians = mean_of(gaussians);
+    double unused_sd;
+    mean_std(train, row.train_seconds, row.train_seconds_std);
+    mean_std(restore, row.restoration_seconds, unused_sd);
+    mean_std(render, row.render_ms_per_view, unused_sd);
+    mean_std(rss, row.peak_rss_mb, unused_sd);
+    mean_std(gaussians, row.gaussians, unused_sd);
     out.cost.push_back(row);
   }
   return out;

@@ -10,18 +10,18 @@ namespace weathergs::recon {
 
 namespace {
 constexpr uint64_t kStreamRobust = 0x726f62757374ull;  // "robust": the warm-up's Bernoulli draws
+}  // namespace
 
-// Per-pixel error: mean over the three channels of |render - target|.
-std::vector<float> pixel_errors(const std::vector<float>& render, const std::vector<float>& target, size_t n) {
-  WGS_CHECK_EQ(render.size(), n * 3);
-  WGS_CHECK_EQ(target.size(), n * 3);
+std::vector<float> robust_pixel_errors(const std::vector<float>& render, const std::vector<float>& target) {
+  WGS_CHECK_EQ(render.size(), target.size());
+  WGS_CHECK_EQ(render.size() % 3, size_t(0));
+  const size_t n = render.size() / 3;
   std::vector<float> e(n);
   for (size_t i = 0; i < n; ++i)
     e[i] = (std::abs(render[i * 3] - target[i * 3]) + std::abs(render[i * 3 + 1] - target[i * 3 + 1]) +
             std::abs(render[i * 3 + 2] - target[i * 3 + 2])) / 3.f;
   return e;
 }
-}  // namespace
 
 RobustMask::RobustMask(RobustMaskOptions options) : options_(options), histogram_(size_t(options.bins), 0.0) {
   WGS_CHECK(options_.bins > 0);
@@ -33,11 +33,11 @@ double RobustMask::keep_probability(int iteration) const {
   return std::clamp(std::exp(options_.schedule_beta * std::floor((1.0 + step) / 1.5)), 0.0, 1.0);
 }
 
-void RobustMask::exclude(const std::vector<float>& render, const std::vector<float>& target, int width, int height,
-                         int iteration, uint64_t seed, std::vector<uint8_t>* invalid) const {
+void RobustMask::exclude(const std::vector<float>& e, int width, int height, int iteration, uint64_t seed,
+                         std::vector<uint8_t>* invalid) const {
   const size_t n = size_t(width) * height;
   WGS_CHECK_EQ(invalid->size(), n);
-  const std::vector<float> e = pixel_errors(render, target, n);
+  WGS_CHECK_EQ(e.size(), n);
   std::vector<uint8_t> inlier(n);
   for (size_t i = 0; i < n; ++i) inlier[i] = e[i] < threshold_ ? 1 : 0;
   const double alpha = keep_probability(iteration);
@@ -60,9 +60,7 @@ void RobustMask::exclude(const std::vector<float>& render, const std::vector<flo
   }
 }
 
-void RobustMask::update(const std::vector<float>& render, const std::vector<float>& target, int width, int height) {
-  const size_t n = size_t(width) * height;
-  const std::vector<float> e = pixel_errors(render, target, n);
+void RobustMask::update(const std::vector<float>& e) {
   const int bins = options_.bins;
   for (double& h : histogram_) h *= options_.histogram_decay;
   for (float v : e) {

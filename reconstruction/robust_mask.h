@@ -29,17 +29,21 @@ struct RobustMaskOptions {
   double histogram_decay = 0.95;  // the running histogram's decay per update
 };
 
+// Per-pixel error: mean over the three channels of |render - target| (H x W x 3 interleaved).
+std::vector<float> robust_pixel_errors(const std::vector<float>& render, const std::vector<float>& target);
+
 class RobustMask {
  public:
   explicit RobustMask(RobustMaskOptions options = {});
 
   // Appends to `invalid` (H x W, 1 = excluded from the loss; already sized, possibly holding the
-  // view's own masks) the pixels the rule excludes at this (1-based) iteration. The Bernoulli
-  // draws are keyed on (seed, iteration, row): the same with any thread count.
-  void exclude(const std::vector<float>& render, const std::vector<float>& target, int width, int height,
-               int iteration, uint64_t seed, std::vector<uint8_t>* invalid) const;
+  // view's own masks) the pixels the rule excludes at this (1-based) iteration, given this
+  // iteration's robust_pixel_errors. The Bernoulli draws are keyed on (seed, iteration, row): the
+  // same with any thread count.
+  void exclude(const std::vector<float>& errors, int width, int height, int iteration, uint64_t seed,
+               std::vector<uint8_t>* invalid) const;
   // Adds this iteration's errors to the running histogram and updates the threshold.
-  void update(const std::vector<float>& render, const std::vector<float>& target, int width, int height);
+  void update(const std::vector<float>& errors);
 
   double threshold() const { return threshold_; }
   // Probability that an excluded pixel is still used at a (1-based) iteration.

@@ -315,7 +315,8 @@ IterationStats Trainer::step() {
   if (options_.robust == TrainOptions::Robust::kRobustFilter) {
     if (view.invalid.empty()) invalid_.assign(size_t(view.camera.width) * view.camera.height, 0);
     else invalid_ = view.invalid;
-    robust_mask_.exclude(state_.image, view.rgb, view.camera.width, view.camera.height, it, options_.seed, &invalid_);
+    robust_errors_ = robust_pixel_errors(state_.image, view.rgb);
+    robust_mask_.exclude(robust_errors_, view.camera.width, view.camera.height, it, options_.seed, &invalid_);
     invalid = &invalid_;
   }
   const LossValue<float> lv = photometric_loss<float>(state_.image, view.rgb, invalid, view.camera.width,
@@ -337,7 +338,7 @@ IterationStats Trainer::step() {
   bool skip_adam = false;
   // The reference updates its error statistics with the running densification statistics only.
   if (options_.robust == TrainOptions::Robust::kRobustFilter && it < options_.densify_until)
-    robust_mask_.update(state_.image, view.rgb, view.camera.width, view.camera.height);
+    robust_mask_.update(robust_errors_);
   if (it < options_.densify_until) {
     const int64_t n = int64_t(g_.size());
     for (int64_t i = 0; i < n; ++i) {

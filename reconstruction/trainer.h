@@ -152,6 +152,7 @@ class Trainer {
   std::vector<int32_t> grad_count_;
   RobustMask robust_mask_;
   std::vector<uint8_t> invalid_;  // this iteration's loss mask (view masks + robust exclusions)
+  std::vector<float> robust_errors_;  // this iteration's per-pixel errors (exclude, then update)
   std::vector<float> v_ndc_, v_image_;
   RasterState<float> state_;
   int iteration_ = 0;

@@ -81,14 +81,21 @@ void check_model(const std::string& model_dir, const std::vector<Camera>& camera
   EXPECT_LT(worst, 2.0) << "triangulation keeps observations within 2 px (Mapper.filter_max_reproj_error)";
 }
 
-TEST(GenerateTest, TinyRainVariantEndToEnd) {
-  if (find_executable("blender").empty() || find_executable("colmap").empty())
-    GTEST_SKIP() << "blender or colmap not installed";
-  TempDir tmp;
+bool have_blender_and_colmap() { return !find_executable("blender").empty() && !find_executable("colmap").empty(); }
+
+// The tiny profile with its own Blender cache in tmp.
+GenerateOptions tiny_options(const TempDir& tmp) {
   GenerateOptions o;
   o.blender.script = testing::blender_script();
   o.profile = "tiny";
   o.cache_dir = tmp / "cache";
+  return o;
+}
+
+TEST(GenerateTest, TinyRainVariantEndToEnd) {
+  if (!have_blender_and_colmap()) GTEST_SKIP() << "blender or colmap not installed";
+  TempDir tmp;
+  GenerateOptions o = tiny_options(tmp);
   const std::string out = tmp / "pool_rain";
   GenerateSummary s = generate_variant(scene_path("pool.json"), "rain", out, o);
   EXPECT_FALSE(s.cache_hit);
@@ -189,13 +196,9 @@ TEST(GenerateTest, TinyRainVariantEndToEnd) {
 // with it (`make demo`, 2026-11-23). An empty triangulation is a result: the model keeps the known
 // poses and has no points, and reconstruct falls back to its random initialization.
 TEST(GenerateTest, TinySnowVariantGeneratesEvenWhenNothingTriangulates) {
-  if (find_executable("blender").empty() || find_executable("colmap").empty())
-    GTEST_SKIP() << "blender or colmap not installed";
+  if (!have_blender_and_colmap()) GTEST_SKIP() << "blender or colmap not installed";
   TempDir tmp;
-  GenerateOptions o;
-  o.blender.script = testing::blender_script();
-  o.profile = "tiny";
-  o.cache_dir = tmp / "cache";
+  const GenerateOptions o = tiny_options(tmp);
   const std::string out = tmp / "pool_snow";
   const GenerateSummary s = generate_variant(scene_path("pool.json"), "snow", out, o);
   EXPECT_EQ(s.views, 5);
@@ -208,10 +211,7 @@ TEST(GenerateTest, TinySnowVariantGeneratesEvenWhenNothingTriangulates) {
 
 TEST(GenerateTest, FailingColmapLeavesNoDataset) {
   TempDir tmp;
-  GenerateOptions o;
-  o.blender.script = testing::blender_script();
-  o.profile = "tiny";
-  o.cache_dir = tmp / "cache";
+  GenerateOptions o = tiny_options(tmp);
   o.colmap_options.executable = tmp / "no-colmap";
   o.blender.executable = tmp / "no-blender";
   try {

@@ -25,19 +25,19 @@ TEST(RobustMaskTest, ThresholdIsTheRunningSeventiethPercentile) {
   for (int i = 0; i < 100; ++i) err[size_t(i)] = float(i) / 100.f;
   std::vector<float> r, t;
   pair_with_errors(err, &r, &t);
-  m.update(r, t, 10, 10);
+  m.update(robust_pixel_errors(r, t));
   // Bins of width 1e-4; 0.69 lands in bin 6899 or 6900 depending on float rounding.
   EXPECT_NEAR(m.threshold(), 0.69, 2e-4);
   // A later, uniformly larger error pulls the running threshold up only partly (decay 0.95).
   for (float& e : err) e = std::min(1.f, e + 0.2f);
   pair_with_errors(err, &r, &t);
-  m.update(r, t, 10, 10);
+  m.update(robust_pixel_errors(r, t));
   EXPECT_GT(m.threshold(), 0.69);
   EXPECT_LT(m.threshold(), 0.89 + 2e-4);
   // Out-of-range errors (a render above 1) are not counted, as in torch.histogram.
   RobustMask only_big;
   pair_with_errors(std::vector<float>(9, 2.f), &r, &t);
-  only_big.update(r, t, 3, 3);
+  only_big.update(robust_pixel_errors(r, t));
   EXPECT_EQ(only_big.threshold(), 1.0);
 }
 
@@ -48,7 +48,7 @@ TEST(RobustMaskTest, NeighbourhoodRuleAndWarmUp) {
   for (int i = 50; i < 100; ++i) half[size_t(i)] = 1.f;
   std::vector<float> r, t;
   pair_with_errors(half, &r, &t);
-  m.update(r, t, 10, 10);
+  m.update(robust_pixel_errors(r, t));
   ASSERT_NEAR(m.threshold(), 1.0 - 1e-4, 1e-9);  // 70% of the mass is reached in the last bin
   m.restore(std::vector<double>(10000, 0.0), 0.5);
   // 7x7 image: a single outlier at (1,1) and a 3x3 outlier block centred at (5,5) (clipped).
@@ -61,7 +61,7 @@ TEST(RobustMaskTest, NeighbourhoodRuleAndWarmUp) {
   const int late = 100000;  // warm-up over: alpha = exp(-3e-3 * 66666) ~ 1e-87
   EXPECT_LT(m.keep_probability(late), 1e-80);
   std::vector<uint8_t> invalid(size_t(w * h), 0);
-  m.exclude(r, t, w, h, late, 7, &invalid);
+  m.exclude(robust_pixel_errors(r, t), w, h, late, 7, &invalid);
   EXPECT_EQ(invalid[1 * w + 1], 0) << "a lone outlier among inliers is kept (8 of 9 neighbours are inliers)";
   EXPECT_EQ(invalid[5 * w + 5], 1) << "the centre of an outlier block is excluded";
   EXPECT_EQ(invalid[6 * w + 6], 1) << "zero padding: the corner has 4 outliers and 5 padded zeros";
@@ -77,8 +77,8 @@ TEST(RobustMaskTest, NeighbourhoodRuleAndWarmUp) {
   pair_with_errors(all_out, &r, &t);
   const int it = 500;
   std::vector<uint8_t> a(size_t(big * big), 0), b(size_t(big * big), 0);
-  m.exclude(r, t, big, big, it, 7, &a);
-  m.exclude(r, t, big, big, it, 7, &b);
+  m.exclude(robust_pixel_errors(r, t), big, big, it, 7, &a);
+  m.exclude(robust_pixel_errors(r, t), big, big, it, 7, &b);
   EXPECT_EQ(a, b) << "the draws are keyed on (seed, iteration, row)";
   double kept = 0;
   for (uint8_t v : a) kept += v ? 0 : 1;
@@ -88,7 +88,7 @@ TEST(RobustMaskTest, NeighbourhoodRuleAndWarmUp) {
   // Pixels already excluded by the view's own mask stay excluded.
   std::vector<uint8_t> pre(size_t(w * h), 1);
   pair_with_errors(std::vector<float>(size_t(w * h), 0.f), &r, &t);
-  m.exclude(r, t, w, h, late, 7, &pre);
+  m.exclude(robust_pixel_errors(r, t), w, h, late, 7, &pre);
   for (uint8_t v : pre) EXPECT_EQ(v, 1);
 }
 
