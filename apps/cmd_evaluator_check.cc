@@ -11,10 +11,17 @@ namespace {
 struct CheckArgs {
   std::vector<std::string> baseline, results;
   evaluator::CheckTolerances tol;
-  std::string json_output;
+  std::string json_output, tolerances_file;
+  CLI::App* sub = nullptr;
 };
 
-int run_check(const CheckArgs& args) {
+int run_check(CheckArgs args) {
+  if (!args.tolerances_file.empty()) {  // the baseline's tolerances; explicit flags still override
+    const evaluator::CheckTolerances file = evaluator::CheckTolerances::from_file(args.tolerances_file);
+    if (args.sub->count("--psnr-tol") == 0) args.tol.psnr = file.psnr;
+    if (args.sub->count("--ssim-tol") == 0) args.tol.ssim = file.ssim;
+    if (args.sub->count("--lpips-tol") == 0) args.tol.lpips = file.lpips;
+  }
   std::vector<evaluator::LoadedResults> base, cur;
   for (const auto& p : args.baseline) base.push_back({p, evaluator::read_results(p)});
   for (const auto& p : args.results) cur.push_back({p, evaluator::read_results(p)});
@@ -33,7 +40,11 @@ Command make_check(CLI::App& root) {
   sub->add_option("--psnr-tol", args->tol.psnr, "Allowed PSNR drop in dB")->capture_default_str();
   sub->add_option("--ssim-tol", args->tol.ssim, "Allowed SSIM drop")->capture_default_str();
   sub->add_option("--lpips-tol", args->tol.lpips, "Allowed LPIPS rise")->capture_default_str();
+  sub->add_option("--tolerances", args->tolerances_file,
+                  "Tolerances file of the baseline ({\"psnr\", \"ssim\", \"lpips\", \"basis\"}, e.g. "
+                  "benchmarks/baselines/demo/tolerances.json); --*-tol flags override it");
   sub->add_option("--json", args->json_output, "Also write the report as JSON to this file");
+  args->sub = sub;
   return {sub, [args] { return run_check(*args); }};
 }
 

@@ -80,6 +80,10 @@ Command make(CLI::App& root) {
       ->capture_default_str();
   sub->add_option("--checkpoint-every", a->options.checkpoint_every, "Iterations between checkpoints (0 = only at the end)")
       ->capture_default_str();
+  sub->add_option("--eval-at", a->options.eval_at,
+                  "Also score the test views at these iterations (comma-separated, e.g. 500,1000,2000): RUN/curve.json "
+                  "holds accuracy against training seconds (docs/study.md)")
+      ->delimiter(',');
   sub->add_flag("--force", a->options.force, "Redo a complete run");
   sub->add_flag("--no-triangulate", a->no_triangulate,
                 "Never run COLMAP: without SfM points in the dataset, use the random initialization");

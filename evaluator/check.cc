@@ -12,6 +12,22 @@ void CheckTolerances::validate() const {
       throw InputError("check tolerances", std::string(name) + " is " + std::to_string(v) + ", must be a finite number >= 0");
 }
 
+CheckTolerances CheckTolerances::from_file(const std::string& path) {
+  JsonReader r = JsonReader::from_file(path);
+  CheckTolerances t;
+  t.psnr = r.get_or<double>("psnr", t.psnr);
+  t.ssim = r.get_or<double>("ssim", t.ssim);
+  t.lpips = r.get_or<double>("lpips", t.lpips);
+  r.get_or<std::string>("basis", "");
+  r.finish();
+  try {
+    t.validate();
+  } catch (const InputError& e) {
+    throw InputError(path, e.problem());
+  }
+  return t;
+}
+
 namespace {
 
 std::map<std::string, const LoadedResults*> by_dataset(const std::vector<LoadedResults>& rs, const char* side) {

@@ -15,6 +15,9 @@ struct CheckTolerances {
   double ssim = 0.005;
   double lpips = 0.005;
   void validate() const;  // InputError: tolerances must be finite and >= 0
+  // A baseline's own tolerances: {"psnr": dB, "ssim": ..., "lpips": ..., "basis": "how they were set"}
+  // (all optional; unknown keys are errors). InputError names the file and key.
+  static CheckTolerances from_file(const std::string& path);
 };
 
 struct CheckReport {

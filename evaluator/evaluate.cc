@@ -41,16 +41,12 @@ MetricValues score_pair(const Image& render, const Image& gt, const ScoringOptio
   return m;
 }
 
-namespace {
-
-std::string hash_files(const std::vector<std::string>& views, const std::vector<std::string>& paths) {
-  // sha256 over "view sha256(file)\n" lines in split order: names and contents both count.
+std::string hash_view_files(const std::vector<std::string>& views, const std::vector<std::string>& paths) {
+  WGS_CHECK(views.size() == paths.size());
   Sha256 h;
   for (size_t i = 0; i < views.size(); ++i) h.update(views[i] + " " + sha256_file(paths[i]) + "\n");
   return h.hex_digest();
 }
-
-}  // namespace
 
 void EvaluateOptions::validate() const {
   const std::string where = "evaluate options";
@@ -133,8 +129,8 @@ Results evaluate(const EvaluateOptions& o) {
   bar.finish();
   for (size_t i = 0; i < views.size(); ++i) r.per_view.emplace_back(views[i], values[i]);
   r.metrics = mean_metrics(r.per_view);
-  r.sha256_renders = hash_files(views, render_paths);
-  r.sha256_ground_truth = hash_files(views, gt_paths);
+  r.sha256_renders = hash_view_files(views, render_paths);
+  r.sha256_ground_truth = hash_view_files(views, gt_paths);
   return r;
 }
 

@@ -44,4 +44,8 @@ struct EvaluateOptions {
 // mismatches and missing masks are InputErrors naming the view.
 Results evaluate(const EvaluateOptions& options);
 
+// The hash results.json records for a set of files: sha256 over "view sha256(file)\n" lines in split
+// order (names and contents both count).
+std::string hash_view_files(const std::vector<std::string>& views, const std::vector<std::string>& paths);
+
 }  // namespace weathergs::evaluator

@@ -2,7 +2,9 @@
 
 #include "reconstruction/init_random.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 
@@ -138,6 +140,8 @@ std::string TrainInputs::to_string() const {
 void TrainRunOptions::validate() const {
   if (dataset.empty()) throw InputError("train run options", "dataset is empty: the dataset folder is required");
   if (out.empty()) throw InputError("train run options", "out is empty: the run folder is required");
+  for (int it : snapshot_at)
+    if (it < 1) throw InputError("train run options", "snapshot_at holds " + std::to_string(it) + ": iterations must be >= 1");
   if (checkpoint_every < 0)
     throw InputError("train run options", "checkpoint_every is " + std::to_string(checkpoint_every) + ", must be >= 0");
   inputs.validate("train run options");
@@ -151,6 +155,7 @@ void RenderRunOptions::validate() const {
   if (!(depth_min_opacity > 0 && depth_min_opacity <= 1))
     throw InputError("render options",
                      "depth_min_opacity is " + std::to_string(depth_min_opacity) + ", must be in (0, 1]");
+  if (snapshot < 0) throw InputError("render options", "snapshot is " + std::to_string(snapshot) + ", must be >= 0");
 }
 
 std::vector<float> render_depth(const GaussianSet<float>& g, const Camera& camera, double min_opacity) {
@@ -282,8 +287,10 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
     seconds_before = trainer.load_checkpoint(ckpt);
   }
   const auto t0 = std::chrono::steady_clock::now();
+  double excluded = 0;  // seconds spent writing snapshots: not training
+  auto elapsed = [&] { return seconds_before + seconds_since(t0) - excluded; };
   auto save = [&](bool complete) {
-    const double s = seconds_before + seconds_since(t0);
+    const double s = elapsed();
     trainer.save_checkpoint(ckpt, s);
     write_ply(ply, trainer.gaussians());
     write_file_atomic(info, run_json(o, trainer, s, complete, init).dump(2) + "\n");
@@ -294,13 +301,26 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
     result.final_loss = st.loss;
     result.final_psnr = st.psnr;
     if (on_iteration) on_iteration(st);
+    if (st.iteration < o.train.iterations &&
+        std::find(o.snapshot_at.begin(), o.snapshot_at.end(), st.iteration) != o.snapshot_at.end()) {
+      const auto w0 = std::chrono::steady_clock::now();
+      const double s = elapsed();
+      const std::string stem = snapshot_stem(o.out, st.iteration);
+      fs::create_directories(fs::path(stem).parent_path());
+      write_ply(stem + ".ply", trainer.gaussians());
+      write_file_atomic(stem + ".json", Json{{"iteration", st.iteration},
+                                             {"train_seconds", s},
+                                             {"num_gaussians", trainer.gaussians().size()}}
+                                                .dump(2) + "\n");
+      excluded += seconds_since(w0);
+    }
     if (o.checkpoint_every > 0 && st.iteration % o.checkpoint_every == 0 && st.iteration < o.train.iterations)
       save(false);
   }
   save(true);
   result.iterations = trainer.iteration();
   result.num_gaussians = int64_t(trainer.gaussians().size());
-  result.train_seconds = seconds_before + seconds_since(t0);
+  result.train_seconds = elapsed();
   result.peak_rss_mb = peak_rss_mb();
   return result;
 }
@@ -315,10 +335,28 @@ TrainRunOptions read_run_options(const std::string& run_dir) {
   return o;
 }
 
+std::string snapshot_stem(const std::string& run_dir, int iteration) {
+  char name[32];
+  std::snprintf(name, sizeof name, "iter_%06d", iteration);
+  return (fs::path(run_dir) / "snapshots" / name).string();
+}
+
 RenderRunResult render_run(const RenderRunOptions& o) {
   o.validate();
-  const RunInfo ri = read_run_json(o.model);
-  const GaussianSet<float> g = read_ply((fs::path(o.model) / "point_cloud.ply").string());
+  RunInfo ri = read_run_json(o.model);
+  std::string ply = (fs::path(o.model) / "point_cloud.ply").string();
+  if (o.snapshot > 0) {
+    const std::string stem = snapshot_stem(o.model, o.snapshot);
+    if (!fs::exists(stem + ".ply") || !fs::exists(stem + ".json"))
+      throw InputError(stem + ".ply", "missing: the run kept no snapshot at iteration " + std::to_string(o.snapshot));
+    JsonReader r = JsonReader::from_file(stem + ".json");
+    ri.iterations = r.get<int>("iteration");
+    ri.train_seconds = r.get<double>("train_seconds");
+    r.get<int64_t>("num_gaussians");
+    r.finish();
+    ply = stem + ".ply";
+  }
+  const GaussianSet<float> g = read_ply(ply);
   const Dataset dataset = read_dataset(o.dataset.empty() ? ri.dataset : o.dataset);
   // "all": every view of the dataset (e.g. depth for the weather generator).
   std::vector<std::string> all_views;

@@ -8,6 +8,9 @@
 //                      "num_gaussians": ..., "train_seconds": ..., "peak_rss_mb": ..., "options": {...}}
 //   point_cloud.ply   the standard 3DGS PLY (written at every checkpoint and at the end)
 //   checkpoint.bin    parameters + Adam state for --resume
+//   snapshots/iter_NNNNNN.{ply,json}  the model at the iterations of `snapshot_at` (accuracy against
+//                     time: json = {"iteration", "train_seconds", "num_gaussians"}); writing them is
+//                     not counted in train_seconds
 // Every file is written atomically; run.json is rewritten at each checkpoint with "complete": false
 // and at the end with "complete": true.
 #pragma once
@@ -55,6 +58,9 @@ struct TrainRunOptions {
   bool resume = false;          // continue from out/checkpoint.bin
   bool force = false;           // start over even if out holds a run
   int checkpoint_every = 1000;  // iterations between checkpoints (0 = only at the end)
+  // Iterations at which to keep a snapshot of the model (snapshots/); those >= the final iteration
+  // are ignored (the final model is point_cloud.ply). Each must be >= 1.
+  std::vector<int> snapshot_at;
   TrainOptions train;
 
   // InputError naming the field, its value and the rule (dataset and out required, ...).
@@ -82,8 +88,12 @@ TrainRunOptions read_run_options(const std::string& run_dir);
 using IterationCallback = std::function<void(const IterationStats&)>;
 TrainRunResult train_run(const TrainRunOptions& options, const IterationCallback& on_iteration = {});
 
+// The snapshot files of a run folder at one iteration: ".ply" and ".json" appended by the caller.
+std::string snapshot_stem(const std::string& run_dir, int iteration);
+
 struct RenderRunOptions {
   std::string model;          // run folder
+  int snapshot = 0;           // > 0: render the snapshot of that iteration instead of the final model
   std::string dataset;        // empty: the dataset recorded in run.json
   std::string split = "test";
   std::string out;            // renders folder (replaced atomically)

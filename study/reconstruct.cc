@@ -1,7 +1,9 @@
 #include "study/reconstruct.h"
 
+#include <algorithm>
 #include <filesystem>
 
+#include "core/atomic_file.h"
 #include "core/colmap_model.h"
 #include "core/dataset.h"
 #include "core/dataset_layout.h"
@@ -18,6 +20,8 @@ namespace {
 constexpr const char* kModelDir = "model";
 constexpr const char* kRendersDir = "renders/test";
 constexpr const char* kResultsFile = "results.json";
+constexpr const char* kCurveFile = "curve.json";
+constexpr const char* kSnapshotRendersDir = "renders/snapshot";  // scratch: removed after scoring
 constexpr const char* kFilteredDir = "filtered";
 constexpr const char* kDetectedDir = "detected";
 
@@ -34,6 +38,8 @@ void ReconstructOptions::validate() const {
   if (iterations < 1) throw InputError("reconstruct options", "iterations " + std::to_string(iterations) + " must be >= 1");
   if (random_init_count < 1) throw InputError("reconstruct options", "random_init_count must be >= 1");
   if (checkpoint_every < 0) throw InputError("reconstruct options", "checkpoint_every must be >= 0");
+  for (int it : eval_at)
+    if (it < 1) throw InputError("reconstruct options", "eval_at holds " + std::to_string(it) + ": iterations must be >= 1");
   colmap.validate();
   led_mask.validate();
   if (recipe(method).lens_detector && led_weights.empty())
@@ -121,6 +127,8 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   t.inputs.points_dir = points_dir;
   t.out = (run / kModelDir).string();
   t.checkpoint_every = o.checkpoint_every;
+  for (int it : o.eval_at)
+    if (it < o.iterations) t.snapshot_at.push_back(it);
   t.train.iterations = o.iterations;
   t.train.seed = o.seed;
   t.train.random_init_count = o.random_init_count;
@@ -168,6 +176,37 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     out.results.method_info["filter_seconds"] = report_seconds(run / kFilteredDir / restoration::kFilterReportFile);
   if (r.lens_detector)
     out.results.method_info["detect_seconds"] = report_seconds(run / kDetectedDir / restoration::kDetectReportFile);
+  // 6. The curve: the same scoring at the snapshots, then the final model.
+  Json points = Json::array();
+  std::vector<int> its = t.snapshot_at;
+  std::sort(its.begin(), its.end());
+  its.erase(std::unique(its.begin(), its.end()), its.end());
+  for (int it : its) {
+    stage("scoring the snapshot at iteration " + std::to_string(it));
+    recon::RenderRunOptions sr = rr;
+    sr.snapshot = it;
+    sr.out = (run / kSnapshotRendersDir).string();
+    recon::render_run(sr);
+    evaluator::EvaluateOptions se = e;
+    se.renders_dir = sr.out;
+    const evaluator::Results sres = evaluator::evaluate(se);
+    Json p = evaluator::metrics_to_json(sres.metrics);
+    p["iteration"] = it;
+    p["train_seconds"] = sres.method_info.value("train_seconds", 0.0);
+    p["num_gaussians"] = sres.method_info.value("num_gaussians", 0);
+    points.push_back(p);
+    fs::remove_all(sr.out);
+  }
+  Json last = evaluator::metrics_to_json(out.results.metrics);
+  last["iteration"] = o.iterations;
+  last["train_seconds"] = out.results.method_info.value("train_seconds", 0.0);
+  last["num_gaussians"] = out.results.method_info.value("num_gaussians", 0);
+  points.push_back(last);
+  const Json curve{{"format", "weathergs-curve"},   {"version", 1},
+                   {"method", to_string(o.method)}, {"dataset", out.results.dataset},
+                   {"scene", out.results.scene},    {"weather", out.results.weather},
+                   {"seed", o.seed},                {"points", points}};
+  write_file_atomic((run / kCurveFile).string(), curve.dump(2) + "\n");
   evaluator::write_results(results_path.string(), out.results);
   out.train_seconds = out.results.method_info.value("train_seconds", 0.0);
   out.peak_rss_mb = out.results.method_info.value("peak_rss_mb", out.peak_rss_mb);

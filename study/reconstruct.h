@@ -8,12 +8,15 @@
 //                       is never modified); logs/colmap/ its logs
 //   model/              the training run (reconstruction/run.h: run.json, point_cloud.ply, checkpoint)
 //   renders/test/       <view>.png and info.json (method, train/render seconds, peak memory, ...)
+//   curve.json          accuracy against training time: the test metrics at the `eval_at` iterations
+//                       (model/snapshots/) and at the end, with the training seconds to get there
 //   results.json        evaluator/results.h, written last: its presence means the run is complete
 // A run interrupted during training resumes from its checkpoint when started again with the same
 // options (same model, byte for byte); a complete run is refused unless `force` (then redone).
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "datagen/colmap.h"
 #include "evaluator/evaluate.h"
@@ -40,6 +43,9 @@ struct ReconstructOptions {
   // The masked loss's normalisation (reconstruction/loss.h); matters for methods with loss masks.
   recon::MaskNormalization mask_normalization = recon::MaskNormalization::kValid;
   int checkpoint_every = 1000;
+  // Iterations at which the test views are also scored (curve.json); those >= iterations are ignored
+  // (the final model is always a point of the curve). Each must be >= 1.
+  std::vector<int> eval_at;
   bool force = false;
   PointsPolicy points = PointsPolicy::kAuto;
   datagen::ColmapOptions colmap;

@@ -235,6 +235,15 @@ TEST_F(EvaluatorCli, LeaderboardAndCheckRoundTrip) {
   EXPECT_EQ(read_json_file(dir / "report.json")["passed"], false);
   // A looser tolerance lets it pass.
   EXPECT_EQ(run_command(kBin + " check --baseline " + base + " --results " + (dir / "worse.json") + " --psnr-tol 1").exit_code, 0);
+  // ... as does the baseline's own tolerances file; an explicit flag overrides it; unknown keys are errors.
+  write_file_atomic(dir / "tol.json", R"({"psnr": 1.0, "basis": "test"})");
+  const std::string with_file = kBin + " check --baseline " + base + " --results " + (dir / "worse.json") +
+                                " --tolerances " + (dir / "tol.json");
+  EXPECT_EQ(run_command(with_file).exit_code, 0);
+  EXPECT_EQ(run_command(with_file + " --psnr-tol 0.1").exit_code, 1);
+  write_file_atomic(dir / "tol2.json", R"({"psnr": 1.0, "psnr_tol": 2})");
+  expect_bad_input(kBin + " check --baseline " + base + " --results " + base + " --tolerances " + (dir / "tol2.json"),
+                   "'psnr_tol'", dir / "t.md");
   // Malformed and unknown-key results are bad input (exit 2), and no table is written.
   write_file_atomic(dir / "broken.json", "{");
   expect_bad_input(kBin + " leaderboard " + (dir / "broken.json") + " -o " + (dir / "t.md"), "broken.json", dir / "t.md");
@@ -243,6 +252,39 @@ TEST_F(EvaluatorCli, LeaderboardAndCheckRoundTrip) {
   write_file_atomic(dir / "unknown.json", j.dump());
   expect_bad_input(kBin + " leaderboard " + (dir / "unknown.json") + " -o " + (dir / "t.md"), "'extra_key'", dir / "t.md");
   expect_bad_input(kBin + " check --baseline " + (dir / "unknown.json") + " --results " + base, "'extra_key'", dir / "t.md");
+}
+
+TEST_F(EvaluatorCli, ExportsNerfBaselinesLayoutMatchingItsReferenceHashes) {
+  TempDir dir;
+  const std::string res = dir / "r.json", out = dir / "nb";
+  ASSERT_EQ(run_command(kBin + " --quiet evaluate --gt " + ds() + " --renders " + renders("box-blur") + " -o " + res)
+                .exit_code, 0);
+  const std::string cmd = kBin + " export-nerfbaselines --results " + res + " --data " + ds() + " --out " + out +
+                          " --renders ";
+  auto r = run_command(cmd + renders("box-blur"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"results.json", "predictions/info.json", "predictions/color/000.png",
+                        "predictions/gt-color/008.png"})
+    EXPECT_TRUE(fs::exists(fs::path(out) / f)) << f;
+  // NerfBaselines' own hashing and encodings, re-implemented in Python from nerfbaselines/io.py.
+  auto py = run_command("/usr/bin/python3 " + std::string(WEATHERGS_SOURCE_DIR) +
+                        "/tests/evaluator/nerfbaselines_reference.py " + out + " " + res);
+  EXPECT_EQ(py.exit_code, 0) << py.output;
+  // An existing export is kept unless --force; renders that are not the scored ones are refused.
+  expect_bad_input(cmd + renders("box-blur"), "--force", dir / "none");
+  EXPECT_EQ(run_command(cmd + renders("box-blur") + " --force").exit_code, 0);
+  const std::string other = copy_renders(renders("box-blur"), dir);
+  fs::copy_file(other + "/008.png", other + "/000.png", fs::copy_options::overwrite_existing);
+  expect_bad_input(kBin + " export-nerfbaselines --results " + res + " --data " + ds() + " --out " + (dir / "nb2") +
+                       " --renders " + other,
+                   "sha256.renders differs", dir / "nb2");
+  // Masked metrics have no NerfBaselines equivalent.
+  Json j = read_json_file(res);
+  j["protocol"]["mask"] = "lens";
+  write_file_atomic(dir / "masked.json", j.dump(2));
+  expect_bad_input(kBin + " export-nerfbaselines --results " + (dir / "masked.json") + " --data " + ds() +
+                       " --out " + (dir / "nb3") + " --renders " + renders("box-blur"),
+                   "masked metrics", dir / "nb3");
 }
 
 }  // namespace

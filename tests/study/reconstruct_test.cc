@@ -108,8 +108,26 @@ TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
   TempDir tmp;
   const std::string data = weathered_dataset(tmp);
   const std::string a = tmp / "a", b = tmp / "b";
-  reconstruct(options(data, a, Method::k3dgs));
+  // a also scores its test views at iterations 50 and 100 (500 is past the end: ignored).
+  ReconstructOptions ao = options(data, a, Method::k3dgs);
+  ao.eval_at = {100, 50, 500};
+  const ReconstructResult ar = reconstruct(ao);
   EXPECT_THROW(reconstruct(options(data, a, Method::k3dgs)), InputError);  // complete: needs force
+  {  // curve.json: 50, 100 and the final 200, training seconds growing, the last point = results.json
+    const Json c = read_json_file(a + "/curve.json");
+    EXPECT_EQ(c.at("format"), "weathergs-curve");
+    EXPECT_EQ(c.at("method"), "3dgs");
+    const Json& p = c.at("points");
+    ASSERT_EQ(p.size(), 3u) << c.dump();
+    EXPECT_EQ(p[0].at("iteration"), 50);
+    EXPECT_EQ(p[1].at("iteration"), 100);
+    EXPECT_EQ(p[2].at("iteration"), 200);
+    EXPECT_LT(p[0].at("train_seconds").get<double>(), p[1].at("train_seconds").get<double>());
+    EXPECT_LT(p[1].at("train_seconds").get<double>(), p[2].at("train_seconds").get<double>());
+    EXPECT_DOUBLE_EQ(p[2].at("psnr").get<double>(), ar.results.metrics.psnr);
+    EXPECT_NE(p[0].at("psnr").get<double>(), p[2].at("psnr").get<double>());
+    EXPECT_FALSE(fs::exists(a + "/renders/snapshot"));  // scratch renders removed
+  }
   // An interrupted run: stop b's training at iteration 120 (after the trainer's own checkpoint at
   // 100), then reconstruct again: it resumes and ends in a's model, byte for byte.
   struct Stop {};
@@ -121,6 +139,9 @@ TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
   } catch (const Stop&) {
   }
   EXPECT_FALSE(fs::exists(b + "/results.json"));
+  // b's last checkpoint is the model at iteration 100: a's snapshot there is the same model, byte for
+  // byte (snapshots neither perturb the training nor hold another iteration).
+  EXPECT_EQ(read_file(a + "/model/snapshots/iter_000100.ply"), read_file(b + "/model/point_cloud.ply"));
   const ReconstructResult r = reconstruct(options(data, b, Method::k3dgs));
   EXPECT_TRUE(r.resumed);
   EXPECT_EQ(read_file(a + "/model/point_cloud.ply"), read_file(b + "/model/point_cloud.ply"));

@@ -37,6 +37,16 @@ TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
   EXPECT_NE(tables.find("## Table I: Rain"), std::string::npos) << tables;
   EXPECT_NE(tables.find("| oracle (reference) |"), std::string::npos) << tables;
   EXPECT_NE(tables.find("computational cost"), std::string::npos) << tables;
+  // Accuracy against time: every run scored at 1/8, 1/4, 1/2 of its 150 iterations and at the end.
+  const std::string curves = read_file(out + "/curves.csv");
+  EXPECT_EQ(curves.rfind("variant,method,seed,iteration,train_seconds,psnr,ssim,lpips,num_gaussians\n", 0), 0u) << curves;
+  for (const char* row : {"pool_rain,3dgs,1,18,", "pool_rain,3dgs,1,150,", "pool_rain,oracle,1,75,"})
+    EXPECT_NE(curves.find(row), std::string::npos) << row << "\n" << curves;
+  EXPECT_EQ(read_file(out + "/curves/pool_rain.png").substr(1, 3), "PNG");
+  // NerfBaselines' layout next to ours.
+  const Json nb = read_json_file(out + "/nerfbaselines/pool_rain/3dgs/seed1/results.json");
+  EXPECT_EQ(nb.at("evaluation_protocol"), "default");
+  EXPECT_EQ(nb.at("predictions_sha256").get<std::string>().size(), 64u);
   // Each cell's output reaches the terminal tagged with the cell, trainer progress included.
   const std::string log1 = read_file(tmp / "1.log");
   EXPECT_NE(log1.find("[pool_rain 3dgs seed1] "), std::string::npos) << log1;
