@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-asan fuzz interop suite demo clean training-data models
+.PHONY: all deps configure build test test-slow test-asan fuzz interop suite demo check-baseline clean training-data models
 
 all: build
 
@@ -80,6 +80,10 @@ suite: build
 
 test-slow: build
 	cd $(BUILD) && ctest --output-on-failure --label-regex slow
+
+# CI's regression check by hand: the cheapest demo cell from scratch against benchmarks/baselines/demo/.
+check-baseline: build
+	bash scripts/check_baseline.sh $(BUILD)/apps/weathergs out/check_baseline
 
 demo: build
 	bash scripts/demo.sh $(BUILD)/apps/weathergs demo_out

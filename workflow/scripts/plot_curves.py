@@ -71,7 +71,7 @@ def main():
 
     def write_csv(tmp):
         with open(tmp, "w", newline="", encoding="utf8") as f:
-            w = csv.DictWriter(f, fieldnames=COLUMNS)
+            w = csv.DictWriter(f, fieldnames=COLUMNS, lineterminator="\n")
             w.writeheader()
             for r in rows:
                 w.writerow({k: ("" if r[k] is None else r[k]) for k in COLUMNS})
