@@ -178,6 +178,13 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     out.results.method_info["detect_seconds"] = report_seconds(run / kDetectedDir / restoration::kDetectReportFile);
   // 6. The curve: the same scoring at the snapshots, then the final model.
   Json points = Json::array();
+  auto add_point = [&](const evaluator::Results& res, int iteration) {
+    Json p = evaluator::metrics_to_json(res.metrics);
+    p["iteration"] = iteration;
+    p["train_seconds"] = res.method_info.value("train_seconds", 0.0);
+    p["num_gaussians"] = res.method_info.value("num_gaussians", 0);
+    points.push_back(p);
+  };
   std::vector<int> its = t.snapshot_at;
   std::sort(its.begin(), its.end());
   its.erase(std::unique(its.begin(), its.end()), its.end());
@@ -189,19 +196,10 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     recon::render_run(sr);
     evaluator::EvaluateOptions se = e;
     se.renders_dir = sr.out;
-    const evaluator::Results sres = evaluator::evaluate(se);
-    Json p = evaluator::metrics_to_json(sres.metrics);
-    p["iteration"] = it;
-    p["train_seconds"] = sres.method_info.value("train_seconds", 0.0);
-    p["num_gaussians"] = sres.method_info.value("num_gaussians", 0);
-    points.push_back(p);
+    add_point(evaluator::evaluate(se), it);
     fs::remove_all(sr.out);
   }
-  Json last = evaluator::metrics_to_json(out.results.metrics);
-  last["iteration"] = o.iterations;
-  last["train_seconds"] = out.results.method_info.value("train_seconds", 0.0);
-  last["num_gaussians"] = out.results.method_info.value("num_gaussians", 0);
-  points.push_back(last);
+  add_point(out.results, o.iterations);
   const Json curve{{"format", "weathergs-curve"},   {"version", 1},
                    {"method", to_string(o.method)}, {"dataset", out.results.dataset},
                    {"scene", out.results.scene},    {"weather", out.results.weather},
