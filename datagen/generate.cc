@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
 #include "core/error.h"
+#include "core/file_lock.h"
 #include "core/progress.h"
 #include "core/sha256.h"
 #include "datagen/exports.h"
@@ -75,11 +77,20 @@ std::string ensure_clean_render(const SceneSpec& scene, const std::string& varia
   fs::create_directories(root);
   const fs::path entry = root / (scene.name + "_" + variant + "_" + o.profile + "_" + cache_key(scene, variant, o));
   // Entries appear atomically (AtomicDirectory), so an existing one is complete.
-  if (fs::exists(entry / layout::kDatasetJson)) {
+  auto hit = [&] {
+    if (!fs::exists(entry / layout::kDatasetJson)) return false;
     if (cache_hit) *cache_hit = true;
     if (seconds) *seconds = seconds_since(start);
-    return entry.string();
-  }
+    return true;
+  };
+  if (hit()) return entry.string();
+  // One renderer per entry: concurrent generate runs (threads, processes, cluster jobs on a shared
+  // file system) wait for the first one and then reuse its render.
+  FileLock lock(entry.string() + ".lock", [&] {
+    std::fprintf(stderr, "waiting for another process rendering %s (lock %s.lock)\n", entry.string().c_str(),
+                 entry.string().c_str());
+  });
+  if (hit()) return entry.string();
   AtomicDirectory dir(entry.string());
   // render_clean_dataset is atomic itself: it replaces the (empty) staging directory on success.
   render_clean_dataset(scene, variant, o.profile, dir.path(), o.blender);

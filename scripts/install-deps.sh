@@ -23,15 +23,17 @@ PACKAGES=(
 
 # Optional groups, installed only when named: `install-deps.sh fuzz` (make fuzz), `install-deps.sh
 # interop` (make interop: headless Chromium; Node.js and npm unless a node is already on PATH, e.g.
-# from NodeSource; the npm packages themselves are pinned in interop/package.json).
+# from NodeSource; the npm packages themselves are pinned in interop/package.json), `install-deps.sh
+# slurm` (make test-slurm: a one-node Slurm cluster started by the test itself).
 for group in "$@"; do
   case "$group" in
     fuzz) PACKAGES+=(clang-14 libclang-rt-14-dev) ;;
+    slurm) PACKAGES+=(slurm-wlm munge) ;;
     interop)
       PACKAGES+=(chromium)
       command -v node >/dev/null 2>&1 || PACKAGES+=(nodejs)
       command -v npm >/dev/null 2>&1 || PACKAGES+=(npm) ;;
-    *) echo "install-deps: unknown group '$group' (known: fuzz, interop)" >&2; exit 2 ;;
+    *) echo "install-deps: unknown group '$group' (known: fuzz, interop, slurm)" >&2; exit 2 ;;
   esac
 done
 
