@@ -40,6 +40,7 @@ int run_train(TrainArgs& args) {
     if (!given("--random-init-count")) o.train.random_init_count = stored.train.random_init_count;
     if (!given("--random-init")) o.train.random_init = stored.train.random_init;
     if (!given("--max-gaussians")) o.train.max_gaussians = stored.train.max_gaussians;
+    if (!given("--distractors-per-view")) o.train.distractors_per_view = stored.train.distractors_per_view;
     if (!given("--mask-normalization")) o.train.mask_normalization = stored.train.mask_normalization;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
@@ -95,6 +96,10 @@ Command make_train(CLI::App& root) {
   sub->add_option("--max-gaussians", o.train.max_gaussians,
                   "Memory guard: densification never grows the model beyond this many Gaussians (~2.6 KiB each)")
       ->capture_default_str();
+  sub->add_option("--distractors-per-view", o.train.distractors_per_view,
+                  "DeSplat-style distractor Gaussians per training view, rendered only for their view and never "
+                  "exported (the desplat method; 0 = plain 3DGS)")
+      ->capture_default_str()->check(CLI::Range(0, 100000));
   sub->add_option("--random-init", args->random_init,
                   "Random initialization when the dataset has no COLMAP points: photo (each point at the depth "
                   "where neighbouring views agree) or frustum (uniform in inverse depth, random colours)")

@@ -48,7 +48,8 @@ Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool c
               {"initialization", init},
               {"iterations", t.iteration()},
               {"sh_degree", t.sh_degree()},
-              {"num_gaussians", t.gaussians().size()},
+              {"num_gaussians", int64_t(t.gaussians().size()) - t.num_distractors()},
+              {"num_distractors", t.num_distractors()},
               {"train_seconds", seconds},
               {"peak_rss_mb", peak_rss_mb()},
               {"densify_capped", t.densify_capped()},
@@ -92,6 +93,7 @@ RunInfo read_run_json(const std::string& run_dir) {
   info.peak_rss_mb = r.get<double>("peak_rss_mb");
   r.get<double>("extent");
   r.get_optional<int>("densify_capped");
+  r.get_optional<int64_t>("num_distractors");  // desplat runs; absent in older run.json
   info.options = TrainOptions::from_json(r.child("options"));
   r.mark("effective_schedule");  // derived from options
   r.finish();
@@ -292,7 +294,7 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
   auto save = [&](bool complete) {
     const double s = elapsed();
     trainer.save_checkpoint(ckpt, s);
-    write_ply(ply, trainer.gaussians());
+    write_ply(ply, trainer.scene_gaussians());  // distractors (desplat) are never exported
     write_file_atomic(info, run_json(o, trainer, s, complete, init).dump(2) + "\n");
   };
   TrainRunResult result;
@@ -307,10 +309,10 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
       const double s = elapsed();
       const std::string stem = snapshot_stem(o.out, st.iteration);
       fs::create_directories(fs::path(stem).parent_path());
-      write_ply(stem + ".ply", trainer.gaussians());
+      write_ply(stem + ".ply", trainer.scene_gaussians());
       write_file_atomic(stem + ".json", Json{{"iteration", st.iteration},
                                              {"train_seconds", s},
-                                             {"num_gaussians", trainer.gaussians().size()}}
+                                             {"num_gaussians", int64_t(trainer.gaussians().size()) - trainer.num_distractors()}}
                                                 .dump(2) + "\n");
       excluded += seconds_since(w0);
     }
@@ -319,7 +321,7 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
   }
   save(true);
   result.iterations = trainer.iteration();
-  result.num_gaussians = int64_t(trainer.gaussians().size());
+  result.num_gaussians = int64_t(trainer.gaussians().size()) - trainer.num_distractors();
   result.train_seconds = elapsed();
   result.peak_rss_mb = peak_rss_mb();
   return result;

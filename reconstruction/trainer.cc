@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/rng.h"
+#include "reconstruction/distractors.h"
 
 namespace weathergs::recon {
 
@@ -75,6 +76,10 @@ void TrainOptions::validate(const std::string& where) const {
   for (int c = 0; c < 3; ++c)
     if (!(background[c] >= 0 && background[c] <= 1))
       fail("background", std::to_string(background[c]), "each channel must be in [0, 1]");
+  if (distractors_per_view < 0 || distractors_per_view > 100000)
+    fail("distractors_per_view", std::to_string(distractors_per_view), "must be in [0, 100000]");
+  if (!(distractor_opacity_weight >= 0 && std::isfinite(distractor_opacity_weight)))
+    fail("distractor_opacity_weight", std::to_string(distractor_opacity_weight), "must be a finite number >= 0");
   if (random_init_count < 1) fail("random_init_count", std::to_string(random_init_count), "must be >= 1");
   if (!(random_init_near_m > 0 && random_init_far_m > random_init_near_m && std::isfinite(random_init_far_m)))
     fail("random_init_near_m/far_m", std::to_string(random_init_near_m) + "/" + std::to_string(random_init_far_m),
@@ -111,6 +116,8 @@ Json TrainOptions::to_json() const {
               {"random_init", to_string(random_init)},
               {"robust", to_string(robust)},
               {"mask_normalization", to_string(mask_normalization)},
+              {"distractors_per_view", distractors_per_view},
+              {"distractor_opacity_weight", distractor_opacity_weight},
               {"random_init_count", random_init_count},
               {"random_init_near_m", random_init_near_m},
               {"random_init_far_m", random_init_far_m}};
@@ -200,6 +207,8 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.random_init = r.get_enum_or("random_init", o.random_init,
                                  {RandomInit::kFrustum, RandomInit::kPhotoConsistent});
   o.random_init_count = r.get_or("random_init_count", o.random_init_count);
+  o.distractors_per_view = r.get_or("distractors_per_view", o.distractors_per_view);
+  o.distractor_opacity_weight = r.get_or("distractor_opacity_weight", o.distractor_opacity_weight);
   o.robust = r.get_enum_or("robust", o.robust, {Robust::kNone, Robust::kRobustFilter});
   o.mask_normalization = r.get_enum_or("mask_normalization", o.mask_normalization,
                                        {MaskNormalization::kValid, MaskNormalization::kReference});
@@ -242,6 +251,13 @@ Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const
   for (const TrainView& v : views_) {
     WGS_CHECK_EQ(v.rgb.size(), size_t(v.camera.width) * v.camera.height * 3);
     if (!v.invalid.empty()) WGS_CHECK_EQ(v.invalid.size(), size_t(v.camera.width) * v.camera.height);
+  }
+  owner_.assign(g_.size(), kSceneOwner);
+  if (options_.distractors_per_view > 0) {
+    std::vector<Camera> cameras;
+    for (const TrainView& v : views_) cameras.push_back(v.camera);
+    add_distractors(cameras, options_.distractors_per_view, options_.seed, DistractorPlacement{}, &g_, &owner_);
+    num_distractors_ = int64_t(cameras.size()) * options_.distractors_per_view;
   }
   adam_m_.assign_zero(g_.size());
   adam_v_.assign_zero(g_.size());
@@ -305,12 +321,20 @@ IterationStats Trainer::step() {
   const int it = ++iteration_;
   check_finite_parameters();
   if (it % options_.sh_degree_interval == 0 && sh_degree_ < options_.max_sh_degree) ++sh_degree_;
-  const TrainView& view = views_[view_for_iteration(it)];
+  const int view_index = view_for_iteration(it);
+  const TrainView& view = views_[view_index];
   const RasterCamera<float> cam = RasterCamera<float>::from(view.camera);
   RasterSettings<float> rs;
   rs.sh_degree = sh_degree_;
   for (int c = 0; c < 3; ++c) rs.background[c] = float(options_.background[c]);
-  rasterize_forward(g_, cam, rs, &state_);
+  // With distractors, this view sees the scene and its own distractors only (distractors.h).
+  const bool subset = num_distractors_ > 0;
+  if (subset) {
+    rows_for_view(owner_, view_index, &rows_);
+    gather_rows(g_, rows_, &sub_);
+  }
+  const GaussianSet<float>& rendered = subset ? sub_ : g_;
+  rasterize_forward(rendered, cam, rs, &state_);
   const std::vector<uint8_t>* invalid = view.invalid.empty() ? nullptr : &view.invalid;
   if (options_.robust == TrainOptions::Robust::kRobustFilter) {
     if (view.invalid.empty()) invalid_.assign(size_t(view.camera.width) * view.camera.height, 0);
@@ -328,7 +352,21 @@ IterationStats Trainer::step() {
       << view.camera.name << "'";
     throw TrainingDiverged(s.str());
   }
-  rasterize_backward(g_, cam, rs, &state_, v_image_, &grad_, &v_ndc_);
+  if (subset) {
+    rasterize_backward(sub_, cam, rs, &state_, v_image_, &sub_grad_, &v_ndc_);
+    scatter_rows(sub_grad_, rows_, g_.size(), &grad_);
+    // The distractors' opacity penalty (distractors.h): weight x the image fraction their opacity
+    // covers, each distractor's footprint being 1/distractors_per_view of the image at placement.
+    const float w = float(options_.distractor_opacity_weight / options_.distractors_per_view);
+    if (w > 0)
+      for (int64_t i : rows_)
+        if (owner_[size_t(i)] == view_index) {
+          const float sg = 1.f / (1.f + std::exp(-g_.opacity_logit[size_t(i)]));
+          grad_.opacity_logit[size_t(i)] += w * sg * (1.f - sg);
+        }
+  } else {
+    rasterize_backward(g_, cam, rs, &state_, v_image_, &grad_, &v_ndc_);
+  }
   check_finite_gradients();
 
   IterationStats stats;
@@ -340,11 +378,12 @@ IterationStats Trainer::step() {
   if (options_.robust == TrainOptions::Robust::kRobustFilter && it < options_.densify_until)
     robust_mask_.update(robust_errors_);
   if (it < options_.densify_until) {
-    const int64_t n = int64_t(g_.size());
-    for (int64_t i = 0; i < n; ++i) {
-      if (state_.radius[i] <= 0) continue;
-      max_radii_[i] = std::max(max_radii_[i], float(state_.radius[i]));
-      grad_accum_[i] += std::hypot(v_ndc_[i * 2], v_ndc_[i * 2 + 1]);
+    const int64_t n = int64_t(rendered.size());
+    for (int64_t k = 0; k < n; ++k) {
+      if (state_.radius[k] <= 0) continue;
+      const int64_t i = subset ? rows_[k] : k;
+      max_radii_[i] = std::max(max_radii_[i], float(state_.radius[k]));
+      grad_accum_[i] += std::hypot(v_ndc_[k * 2], v_ndc_[k * 2 + 1]);
       grad_count_[i] += 1;
     }
     if (it > options_.densify_from && it % options_.densification_interval == 0) {
@@ -465,6 +504,7 @@ void Trainer::densify_and_prune(bool prune_large) {
   // Layout after densification, as the reference builds it: [originals, clones, split copy 0 of
   // every selected, split copy 1 of every selected]; then the split originals are removed.
   const size_t total = n + num_clone + 2 * num_split;
+  std::vector<int32_t> owner(total, kSceneOwner);  // copies keep their original's owner
   GaussianSet<float> out, m, v;
   out.resize(total);
   m.assign_zero(total);
@@ -473,15 +513,17 @@ void Trainer::densify_and_prune(bool prune_large) {
     out.copy_from(g_, i, i);
     m.copy_from(adam_m_, i, i);
     v.copy_from(adam_v_, i, i);
+    owner[i] = owner_[i];
   }
   size_t w = n;
   for (size_t i = 0; i < n; ++i)
-    if (clone[i]) out.copy_from(g_, i, w++);
+    if (clone[i]) owner[w] = owner_[i], out.copy_from(g_, i, w++);
   const float log_shrink = float(std::log(0.8 * 2));
   for (int copy = 0; copy < 2; ++copy) {
     for (size_t i = 0; i < n; ++i) {
       if (!split[i]) continue;
       out.copy_from(g_, i, w);
+      owner[w] = owner_[i];
       Rng rng(options_.seed, kStreamSplit ^ (uint64_t(iteration_) << 8), uint64_t(i) * 2 + copy);
       Vec3<float> sample;
       for (int k = 0; k < 3; ++k) sample[k] = float(rng.normal()) * std::exp(g_.log_scale[i * 3 + k]);
@@ -512,6 +554,12 @@ void Trainer::densify_and_prune(bool prune_large) {
   out.keep(keep);
   m.keep(keep);
   v.keep(keep);
+  size_t kept = 0;
+  num_distractors_ = 0;
+  for (size_t i = 0; i < total; ++i)
+    if (keep[i]) num_distractors_ += owner[i] != kSceneOwner, owner[kept++] = owner[i];
+  owner.resize(kept);
+  owner_ = std::move(owner);
   g_ = std::move(out);
   adam_m_ = std::move(m);
   adam_v_ = std::move(v);
@@ -520,113 +568,8 @@ void Trainer::densify_and_prune(bool prune_large) {
   max_radii_.assign(g_.size(), 0.f);
 }
 
-// ---------------------------------------------------------------------------------------------
-// Checkpoints: "WGSCKPT2", uint64 JSON length, JSON header, then the float arrays in a fixed order,
-// the int32 view counts, and the robust mask's histogram (doubles; robust runs only). Format 1 had
-// no robust state.
-
-namespace {
-constexpr char kCheckpointMagic[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '2'};
-constexpr char kCheckpointMagicV1[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '1'};
-}
-
-void Trainer::save_checkpoint(const std::string& path, double train_seconds) const {
-  Json header{{"iteration", iteration_},
-              {"sh_degree", sh_degree_},
-              {"num_gaussians", g_.size()},
-              {"adam_steps", std::vector<int64_t>(adam_steps_.begin(), adam_steps_.end())},
-              {"extent", extent_},
-              {"train_seconds", train_seconds},
-              {"robust_threshold", robust_mask_.threshold()},
-              {"robust_bins", options_.robust == TrainOptions::Robust::kNone ? 0 : robust_mask_.options().bins},
-              {"options", options_.to_json()}};
-  const std::string h = header.dump();
-  std::string out(kCheckpointMagic, 8);
-  const uint64_t len = h.size();
-  out.append(reinterpret_cast<const char*>(&len), 8);
-  out += h;
-  auto put = [&](const std::vector<float>& a) {
-    out.append(reinterpret_cast<const char*>(a.data()), a.size() * sizeof(float));
-  };
-  for (const GaussianSet<float>* s : {&g_, &adam_m_, &adam_v_}) {
-    put(s->position); put(s->log_scale); put(s->rotation); put(s->opacity_logit); put(s->sh);
-  }
-  put(grad_accum_);
-  put(max_radii_);
-  out.append(reinterpret_cast<const char*>(grad_count_.data()), grad_count_.size() * sizeof(int32_t));
-  if (options_.robust != TrainOptions::Robust::kNone) {
-    const std::vector<double>& h = robust_mask_.histogram();
-    out.append(reinterpret_cast<const char*>(h.data()), h.size() * sizeof(double));
-  }
-  write_file_atomic(path, out);
-}
-
-double Trainer::load_checkpoint(const std::string& path) {
-  const std::string bytes = read_file(path);
-  if (bytes.size() >= 8 && std::memcmp(bytes.data(), kCheckpointMagicV1, 8) == 0)
-    throw InputError(path, "checkpoint of an older weathergs (format 1); start the run over with --force");
-  if (bytes.size() < 16 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0)
-    throw InputError(path, "not a weathergs training checkpoint (bad magic)");
-  uint64_t len;
-  std::memcpy(&len, bytes.data() + 8, 8);
-  if (len > bytes.size() - 16) throw InputError(path, "truncated checkpoint header");
-  Json hj;
-  try {
-    hj = Json::parse(bytes.substr(16, len));
-  } catch (const std::exception& e) {
-    throw InputError(path, std::string("corrupt checkpoint header: ") + e.what());
-  }
-  JsonReader h(hj, path);
-  const TrainOptions stored = TrainOptions::from_json(h.child("options"));
-  if (stored.to_json() != options_.to_json())
-    throw InputError(path, "checkpoint was written with different training options");
-  const int iteration = h.get<int>("iteration");
-  const int sh_degree = h.get<int>("sh_degree");
-  const size_t n = h.get<size_t>("num_gaussians");
-  JsonReader steps = h.child("adam_steps");
-  if (steps.size() != 6) throw InputError(steps.where(), "expected 6 step counts");
-  std::array<int64_t, 6> adam_steps{};
-  for (int k = 0; k < 6; ++k) adam_steps[k] = steps.at(k).as<int64_t>();
-  const double extent = h.get<double>("extent");
-  const double seconds = h.get<double>("train_seconds");
-  const double robust_threshold = h.get<double>("robust_threshold");
-  const size_t robust_bins = h.get<size_t>("robust_bins");
-  h.finish();
-  const size_t want_bins = options_.robust == TrainOptions::Robust::kNone ? 0 : size_t(robust_mask_.options().bins);
-  if (robust_bins != want_bins)
-    throw InputError(path, "checkpoint robust_bins = " + std::to_string(robust_bins) + ", expected " +
-                               std::to_string(want_bins));
-  const size_t floats_per = 3 + 3 + 4 + 1 + kShFloats;
-  const size_t expected = 16 + len + n * (3 * floats_per + 2) * sizeof(float) + n * sizeof(int32_t) +
-                        robust_bins * sizeof(double);
-  if (bytes.size() != expected)
-    throw InputError(path, "checkpoint size " + std::to_string(bytes.size()) + " bytes, expected " +
-                               std::to_string(expected));
-  size_t off = 16 + len;
-  auto get = [&](std::vector<float>& a, size_t count) {
-    a.resize(count);
-    std::memcpy(a.data(), bytes.data() + off, count * sizeof(float));
-    off += count * sizeof(float);
-  };
-  for (GaussianSet<float>* s : {&g_, &adam_m_, &adam_v_}) {
-    get(s->position, n * 3); get(s->log_scale, n * 3); get(s->rotation, n * 4); get(s->opacity_logit, n);
-    get(s->sh, n * kShFloats);
-  }
-  get(grad_accum_, n);
-  get(max_radii_, n);
-  grad_count_.resize(n);
-  std::memcpy(grad_count_.data(), bytes.data() + off, n * sizeof(int32_t));
-  off += n * sizeof(int32_t);
-  if (robust_bins > 0) {
-    std::vector<double> hist(robust_bins);
-    std::memcpy(hist.data(), bytes.data() + off, robust_bins * sizeof(double));
-    robust_mask_.restore(std::move(hist), robust_threshold);
-  }
-  iteration_ = iteration;
-  sh_degree_ = sh_degree;
-  adam_steps_ = adam_steps;
-  extent_ = extent;
-  return seconds;
+GaussianSet<float> Trainer::scene_gaussians() const {
+  return num_distractors_ > 0 ? scene_rows(g_, owner_) : g_;
 }
 
 }  // namespace weathergs::recon

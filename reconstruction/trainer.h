@@ -73,6 +73,13 @@ struct TrainOptions {
   // point where neighbouring train views agree in colour; kFrustum is the plain random cloud.
   enum class RandomInit { kFrustum, kPhotoConsistent };
   RandomInit random_init = RandomInit::kPhotoConsistent;
+  // The desplat method (reconstruction/distractors.h): this many distractor Gaussians per training
+  // view, rendered only for their own view, never exported. 0 = plain 3DGS.
+  int distractors_per_view = 0;
+  // Their opacity penalty: the loss gains weight x (image fraction the distractors' opacity covers),
+  // so a distractor survives only where it explains more than the multi-view scene can. Ours, not
+  // DeSplat's: without it the distractors took scene content (docs/reconstruction.md, "desplat").
+  double distractor_opacity_weight = 0.01;
   int random_init_count = 50000;      // Gaussians when the dataset has no COLMAP points
   double random_init_near_m = 0.5;    // depth range (m) of the random initialization
   double random_init_far_m = 20.0;
@@ -121,7 +128,13 @@ class Trainer {
   int sh_degree() const { return sh_degree_; }
   // Densification steps at which the max_gaussians guard held candidates back (0 = never).
   int densify_capped() const { return densify_capped_; }
+  // Every Gaussian being optimised: the scene's and (desplat) the per-view distractors, see owners().
   const GaussianSet<float>& gaussians() const { return g_; }
+  // The owner of each row of gaussians(): kSceneOwner or the training view's index.
+  const std::vector<int32_t>& owners() const { return owner_; }
+  // The scene alone: what is exported (point_cloud.ply) and rendered at test time.
+  GaussianSet<float> scene_gaussians() const;
+  int64_t num_distractors() const { return num_distractors_; }
   GaussianSet<float>& mutable_gaussians() { return g_; }  // tests inject faults through this
   const TrainOptions& options() const { return requested_; }    // as given (run.json, resume)
   const TrainOptions& effective_options() const { return options_; }  // with the scaled schedule
@@ -155,6 +168,10 @@ class Trainer {
   std::vector<float> robust_errors_;  // this iteration's per-pixel errors (exclude, then update)
   std::vector<float> v_ndc_, v_image_;
   RasterState<float> state_;
+  std::vector<int32_t> owner_;  // per Gaussian: kSceneOwner or its training view (desplat)
+  int64_t num_distractors_ = 0;
+  std::vector<int64_t> rows_;  // this iteration's rendered rows when distractors exist
+  GaussianSet<float> sub_, sub_grad_;
   int iteration_ = 0;
   int sh_degree_ = 0;
   int densify_capped_ = 0;

@@ -14,6 +14,7 @@ const char* to_string(Method m) {
     case Method::kWeatherGSNoAef: return "weathergs-no-aef";
     case Method::kWeatherGSNoLed: return "weathergs-no-led";
     case Method::kRobust3dgs: return "robust-3dgs";
+    case Method::kDesplat: return "desplat";
   }
   WGS_CHECK(false);
   return "";
@@ -21,7 +22,8 @@ const char* to_string(Method m) {
 
 std::vector<Method> all_methods() {
   return {Method::k3dgs,     Method::kOracle,         Method::kGtMasks,       Method::kAefTophat,
-          Method::kWeatherGS, Method::kWeatherGSNoAef, Method::kWeatherGSNoLed, Method::kRobust3dgs};
+          Method::kWeatherGS, Method::kWeatherGSNoAef, Method::kWeatherGSNoLed, Method::kRobust3dgs,
+          Method::kDesplat};
 }
 
 Method parse_method(const std::string& name, const std::string& where) {
@@ -47,6 +49,9 @@ std::string method_description(Method m) {
     case Method::kRobust3dgs:
       return "3DGS with the RobustFilter distractor mask (SpotLessSplats' robust baseline: pixels above the running "
              "70th-percentile error excluded from the loss, annealed), no opacity reset";
+    case Method::kDesplat:
+      return "3DGS with DeSplat-style distractor Gaussians: " + std::to_string(kDesplatDistractorsPerView) +
+             " per training view in front of its camera, rendered only for that view, dropped at test time";
   }
   WGS_CHECK(false);
   return "";
@@ -66,6 +71,7 @@ Recipe recipe(Method m) {
     case Method::kWeatherGSNoAef: r.lens_detector = true; break;
     case Method::kWeatherGSNoLed: r.particle_filter = true; break;
     case Method::kRobust3dgs: r.robust = true; break;
+    case Method::kDesplat: r.distractors_per_view = kDesplatDistractorsPerView; break;
   }
   return r;
 }

@@ -22,12 +22,18 @@ enum class Method {
   kWeatherGSNoAef,  // ablation (the paper's Table III): LED on the raw views, 3DGS on the raw images, masked
   kWeatherGSNoLed,  // ablation: AEF only (while the AEF is the classical one, the same recipe as aef-tophat)
   kRobust3dgs,      // 3DGS with the RobustFilter per-pixel distractor mask (reconstruction/robust_mask.h)
+  kDesplat,         // 3DGS with per-view distractor Gaussians, dropped at test time (reconstruction/distractors.h)
 };
 const char* to_string(Method m);
 std::vector<Method> all_methods();
 // InputError naming `where` and the known names.
 Method parse_method(const std::string& name, const std::string& where);
 std::string method_description(Method m);
+
+// Distractor Gaussians per training view of the desplat method: enough footprints to cover a view
+// once (radius ~4 px at 300x200, distractors.h) and few next to a scene of 10^4-10^5 Gaussians. Set
+// before any benchmark run, not tuned on it.
+constexpr int kDesplatDistractorsPerView = 1000;
 
 struct Recipe {
   recon::TrainImages images = recon::TrainImages::kImages;
@@ -37,6 +43,7 @@ struct Recipe {
   bool lens_detector = false;    // exclude the LED's mask (RUN/detected/) from the loss; the LED sees the
                                  // filtered images when particle_filter, else the raw ones
   bool robust = false;           // the trainer's RobustFilter mask (TrainOptions::Robust::kRobustFilter)
+  int distractors_per_view = 0;  // TrainOptions::distractors_per_view (desplat)
 };
 Recipe recipe(Method m);
 

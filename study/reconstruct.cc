@@ -134,6 +134,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   t.train.random_init_count = o.random_init_count;
   t.train.mask_normalization = o.mask_normalization;
   if (r.robust) t.train.robust = recon::TrainOptions::Robust::kRobustFilter;
+  t.train.distractors_per_view = r.distractors_per_view;
   const fs::path run_json = run / kModelDir / "run.json";
   bool trained = false;
   if (fs::exists(run_json)) {
