@@ -20,11 +20,14 @@ for tool in snakemake blender colmap munged slurmctld slurmd sbatch; do
 done
 [ "$(id -u)" = 0 ] || { echo "study/slurm: needs root to run slurmd: skipped"; exit 77; }
 
+CLUSTER=$WORK/cluster
+# Daemons left by an earlier run that was killed (SIGKILL skips traps) go before their pid files do.
+[ -d "$CLUSTER" ] && bash "$SRC/scripts/slurm-local.sh" stop "$CLUSTER"
 rm -rf "$WORK"
 mkdir -p "$WORK"
 cd "$WORK"
-CLUSTER=$WORK/cluster
 trap 'bash "$SRC/scripts/slurm-local.sh" stop "$CLUSTER"' EXIT
+trap 'exit 1' INT TERM HUP  # through the EXIT trap
 eval "$(bash "$SRC/scripts/slurm-local.sh" start "$CLUSTER" 2 8000)"
 export USER=${USER:-weathergs}
 
