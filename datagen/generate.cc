@@ -86,9 +86,13 @@ std::string ensure_clean_render(const SceneSpec& scene, const std::string& varia
   if (hit()) return entry.string();
   // One renderer per entry: concurrent generate runs (threads, processes, cluster jobs on a shared
   // file system) wait for the first one and then reuse its render.
-  FileLock lock(entry.string() + ".lock", [&] {
-    std::fprintf(stderr, "waiting for another process rendering %s (lock %s.lock)\n", entry.string().c_str(),
-                 entry.string().c_str());
+  // Lock files live beside clean/, not in it: clean/ holds complete entries only.
+  const fs::path locks = fs::path(o.cache_dir) / "locks";
+  fs::create_directories(locks);
+  const std::string lock_path = (locks / (entry.filename().string() + ".lock")).string();
+  FileLock lock(lock_path, [&] {
+    std::fprintf(stderr, "waiting for another process rendering %s (lock %s)\n", entry.string().c_str(),
+                 lock_path.c_str());
   });
   if (hit()) return entry.string();
   AtomicDirectory dir(entry.string());
