@@ -41,6 +41,8 @@ int run_train(TrainArgs& args) {
     if (!given("--random-init")) o.train.random_init = stored.train.random_init;
     if (!given("--max-gaussians")) o.train.max_gaussians = stored.train.max_gaussians;
     if (!given("--distractors-per-view")) o.train.distractors_per_view = stored.train.distractors_per_view;
+    if (!given("--distractor-opacity-weight"))
+      o.train.distractor_opacity_weight = stored.train.distractor_opacity_weight;
     if (!given("--mask-normalization")) o.train.mask_normalization = stored.train.mask_normalization;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
@@ -100,6 +102,10 @@ Command make_train(CLI::App& root) {
                   "DeSplat-style distractor Gaussians per training view, rendered only for their view and never "
                   "exported (the desplat method; 0 = plain 3DGS)")
       ->capture_default_str()->check(CLI::Range(0, 100000));
+  sub->add_option("--distractor-opacity-weight", o.train.distractor_opacity_weight,
+                  "Opacity penalty of the distractor Gaussians: the loss gains this x the image fraction their "
+                  "opacity covers (docs/reconstruction.md)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   sub->add_option("--random-init", args->random_init,
                   "Random initialization when the dataset has no COLMAP points: photo (each point at the depth "
                   "where neighbouring views agree) or frustum (uniform in inverse depth, random colours)")

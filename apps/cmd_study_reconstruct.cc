@@ -75,6 +75,9 @@ Command make(CLI::App& root) {
                   "pixels) or reference (the WeatherGS release: masked target pixels replaced by the render, means "
                   "over all pixels); docs/reconstruction.md")
       ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
+  sub->add_option("--distractor-opacity-weight", a->options.distractor_opacity_weight,
+                  "desplat: opacity penalty of the per-view distractor Gaussians (docs/reconstruction.md)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   sub->add_option("--random-init-count", a->options.random_init_count,
                   "Gaussians of the random initialization (used when there are no SfM points)")
       ->capture_default_str();

@@ -1,6 +1,7 @@
 #include "study/reconstruct.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "core/atomic_file.h"
@@ -37,6 +38,9 @@ void ReconstructOptions::validate() const {
   if (out.empty()) throw InputError("reconstruct options", "out is empty: the run folder is required");
   if (iterations < 1) throw InputError("reconstruct options", "iterations " + std::to_string(iterations) + " must be >= 1");
   if (random_init_count < 1) throw InputError("reconstruct options", "random_init_count must be >= 1");
+  if (!(distractor_opacity_weight >= 0 && std::isfinite(distractor_opacity_weight)))
+    throw InputError("reconstruct options", "distractor_opacity_weight " + std::to_string(distractor_opacity_weight) +
+                                                " must be a finite number >= 0");
   if (checkpoint_every < 0) throw InputError("reconstruct options", "checkpoint_every must be >= 0");
   for (int it : eval_at)
     if (it < 1) throw InputError("reconstruct options", "eval_at holds " + std::to_string(it) + ": iterations must be >= 1");
@@ -135,6 +139,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   t.train.mask_normalization = o.mask_normalization;
   if (r.robust) t.train.robust = recon::TrainOptions::Robust::kRobustFilter;
   t.train.distractors_per_view = r.distractors_per_view;
+  t.train.distractor_opacity_weight = o.distractor_opacity_weight;
   const fs::path run_json = run / kModelDir / "run.json";
   bool trained = false;
   if (fs::exists(run_json)) {

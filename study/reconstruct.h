@@ -42,6 +42,8 @@ struct ReconstructOptions {
   int random_init_count = 50000;  // Gaussians of the random initialization (when no SfM points)
   // The masked loss's normalisation (reconstruction/loss.h); matters for methods with loss masks.
   recon::MaskNormalization mask_normalization = recon::MaskNormalization::kValid;
+  // desplat: TrainOptions::distractor_opacity_weight (the opacity penalty of the per-view distractors).
+  double distractor_opacity_weight = recon::TrainOptions{}.distractor_opacity_weight;
   int checkpoint_every = 1000;
   // Iterations at which the test views are also scored (curve.json); those >= iterations are ignored
   // (the final model is always a point of the curve). Each must be >= 1.

@@ -260,6 +260,7 @@ TEST(TrainerTest, MaskedOccluderIsNotReconstructed) {
   Trainer tr(unmasked, point_init(s.truth, 5), ro, extent);
   TrainOptions dso = o;
   dso.distractors_per_view = 100;  // desplat: no mask given, per-view Gaussians take the occluder
+  dso.distractor_opacity_weight = 0.01;  // a large opaque occluder: the weight measured for it (docs)
   Trainer td(unmasked, point_init(s.truth, 5), dso, extent);
   while (tm.iteration() < o.iterations) { tm.step(); tu.step(); tr.step(); td.step(); }
   // Scored against the clean images on the occluded region only.
