@@ -83,10 +83,18 @@ inline T splat_power(T ca, T cb, T cc, T dx, T dy) {
   return T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
 }
 
-// The float tile kernels (raster_simd.cc): 4 pixels at a time, lane by lane the same operations as
-// the scalar templates of rasterizer.cc.
+// The float tile kernels (raster_simd.cc): 4 or 8 pixels at a time, lane by lane the same
+// operations as the scalar templates of rasterizer.cc; every width gives bit-identical results.
 void render_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, int64_t tile);
 void backward_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, const std::vector<float>& v_image,
                         int64_t tile);
+
+
+// The lane count of the tile kernels: 8 where the CPU has AVX2, else 4, chosen once per process.
+// set_tile_kernel_width switches it (tests, benchmarks); it returns false and changes nothing for a
+// width other than 4 or 8 or one the CPU cannot run. Not to be
+// called while a rasterization runs.
+int tile_kernel_width();
+bool set_tile_kernel_width(int width);
 
 }  // namespace weathergs::recon::internal

@@ -52,7 +52,6 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
       const Vec3<T> color = sh_to_color(settings.sh_degree, &g.sh[i * kShFloats], dir, clamped);
       if (!all_finite<T>({color.x(), color.y(), color.z()})) continue;
       s->radius[i] = int32_t(std::min<T>(radius, T(std::numeric_limits<int32_t>::max() / 2)));
-      s->rect[i * 4] = x0; s->rect[i * 4 + 1] = y0; s->rect[i * 4 + 2] = x1; s->rect[i * 4 + 3] = y1;
       s->mean2d[i * 2] = pr.mean.x(); s->mean2d[i * 2 + 1] = pr.mean.y();
       s->cov2d[i * 3] = a; s->cov2d[i * 3 + 1] = b; s->cov2d[i * 3 + 2] = c;
       s->conic[i * 3] = conic_a; s->conic[i * 3 + 1] = conic_b; s->conic[i * 3 + 2] = conic_c;
@@ -66,8 +65,43 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
       sp[9] = alpha_extent(sp[5], a);
       sp[10] = alpha_extent(sp[5], c);
       sp[11] = T(0);
+      // Opacity-aware tiles: the kernels blend only pixels within the alpha extent, so tiles of the
+      // 3-sigma rectangle that no such pixel reaches get no entry (same images and gradients, fewer
+      // entries to bin, sort and replay). `radius` stays the reference's (densification uses it).
+      int32_t* r = &s->rect[i * 4];
+      if (sp[9] < T(0)) {
+        r[0] = r[1] = r[2] = r[3] = 0;
+      } else {
+        r[0] = std::max(x0, tile_floor_index(std::ceil(pr.mean.x() - sp[9] - T(0.5)), s->tiles_x));
+        r[1] = std::max(y0, tile_floor_index(std::ceil(pr.mean.y() - sp[10] - T(0.5)), s->tiles_y));
+        r[2] = std::min(x1, tile_floor_index(std::floor(pr.mean.x() + sp[9] - T(0.5)) + T(kTileSize), s->tiles_x));
+        r[3] = std::min(y1, tile_floor_index(std::floor(pr.mean.y() + sp[10] - T(0.5)) + T(kTileSize), s->tiles_y));
+        if (r[2] <= r[0] || r[3] <= r[1]) r[0] = r[1] = r[2] = r[3] = 0;
+      }
     }
   });
+}
+
+// Sorts the (depth bits << 32 | index) keys, which arrive in increasing index order: a stable LSD
+// radix sort on the 32 depth bits (three passes of 11 bits) keeps that order among equal depths, so
+// the result is exactly std::sort's of the 64-bit keys, in linear time.
+inline void sort_by_depth(std::vector<uint64_t>* keys) {
+  constexpr int kBits = 11, kBuckets = 1 << kBits;
+  static thread_local std::vector<uint64_t> tmp;
+  tmp.resize(keys->size());
+  uint64_t* src = keys->data();
+  uint64_t* dst = tmp.data();
+  const size_t n = keys->size();
+  for (int pass = 0; pass < 3; ++pass) {
+    const int shift = 32 + pass * kBits;
+    size_t count[kBuckets + 1] = {};
+    for (size_t i = 0; i < n; ++i) ++count[((src[i] >> shift) & (kBuckets - 1)) + 1];
+    for (int b = 0; b < kBuckets; ++b) count[b + 1] += count[b];
+    for (size_t i = 0; i < n; ++i) dst[count[(src[i] >> shift) & (kBuckets - 1)]++] = src[i];
+    std::swap(src, dst);
+  }
+  // Three passes: the sorted keys are in tmp.
+  keys->swap(tmp);
 }
 
 // Builds the per-tile depth-sorted lists and, per Gaussian, the entries of its tiles. One global
@@ -91,7 +125,7 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
     std::memcpy(&bits, &d, 4);
     keys->push_back((uint64_t(bits) << 32) | uint64_t(uint32_t(i)));
   }
-  std::sort(keys->begin(), keys->end());
+  sort_by_depth(keys);
   const int64_t visible = int64_t(keys->size());
   const int64_t entries = s->entry_offset[n];
   s->tile_offset.assign(num_tiles + 1, 0);
@@ -355,12 +389,26 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
   });
 
   // 2. Per Gaussian: sum its entries in tile order, then pull back to the parameters.
-  grad->assign_zero(size_t(n));
-  if (v_mean2d_ndc) v_mean2d_ndc->assign(size_t(n) * 2, T(0));
+  // Sized here and zeroed per Gaussian in the parallel loop below (one pass over the memory instead
+  // of a serial fill first): every element is written for every Gaussian.
+  grad->position.resize(size_t(n) * 3);
+  grad->log_scale.resize(size_t(n) * 3);
+  grad->rotation.resize(size_t(n) * 4);
+  grad->opacity_logit.resize(size_t(n));
+  grad->sh.resize(size_t(n) * kShFloats);
+  if (v_mean2d_ndc) v_mean2d_ndc->resize(size_t(n) * 2);
   const T ndc_x = T(0.5) * T(s->width), ndc_y = T(0.5) * T(s->height);
   parallel_for_chunks(0, n, kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
     for (int64_t i = lo; i < hi; ++i) {
-      if (s->radius[i] == 0) continue;
+      std::fill_n(&grad->sh[i * kShFloats], kShFloats, T(0));  // sh_to_color_vjp accumulates
+      if (s->radius[i] == 0) {
+        std::fill_n(&grad->position[i * 3], 3, T(0));
+        std::fill_n(&grad->log_scale[i * 3], 3, T(0));
+        std::fill_n(&grad->rotation[i * 4], 4, T(0));
+        grad->opacity_logit[i] = T(0);
+        if (v_mean2d_ndc) (*v_mean2d_ndc)[i * 2] = (*v_mean2d_ndc)[i * 2 + 1] = T(0);
+        continue;
+      }
       T eg[kEntryGrads] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
       for (int64_t j = s->entry_offset[i]; j < s->entry_offset[i + 1]; ++j) {
         const T* e = &s->entry_grad[s->entry_of[j] * kEntryGrads];

@@ -2,7 +2,8 @@
 // diff-gaussian-rasterization, with the same constants (gaussian_math.h).
 //
 // Forward: per Gaussian (parallel) projection, 2D covariance and SH colour; binning into 16x16 tiles
-// with the reference's 3-sigma radius; per-tile lists sorted by depth (ties by index); per tile
+// with the reference's 3-sigma radius, less the tiles where its alpha cannot reach 1/255 (the blend's
+// own cut-off, so images and gradients are unchanged); per-tile lists sorted by depth (ties by index); per tile
 // (parallel) front-to-back blending. Backward: per tile (parallel) back-to-front replay of each
 // pixel's blend, one gradient slot per (tile, Gaussian) entry; then per Gaussian (parallel) the slots
 // are summed in tile order and pulled back to the parameters. No float atomics, no per-thread
@@ -39,7 +40,8 @@ struct RasterState {
   std::vector<T> color;          // N x 3
   std::vector<T> depth;          // N, camera z
   std::vector<int32_t> radius;   // N, reference radius in px; 0 = not rendered
-  std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive)
+  std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive): the 3-sigma rectangle's
+                                 // tiles that pixels with alpha >= 1/255 can lie in; may be empty
   std::vector<uint8_t> clamped;  // N, bit c set when colour channel c was clamped at 0
   // Packed per-Gaussian record read by the tile loops (one cache line): mean x, y, conic a, b, c,
   // opacity, r, g, b, and the half extents (px) of the region where alpha can reach 1/255.

@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "core/rng.h"
+#include "reconstruction/adam.h"
 #include "reconstruction/distractors.h"
 
 namespace weathergs::recon {
@@ -289,8 +290,8 @@ void Trainer::check_finite_array(const std::vector<float>& a, ParamGroup group, 
     const int64_t n = int64_t(a.size());
     std::vector<int64_t> first(size_t(num_chunks(0, n, kChunk)), -1);
     parallel_for_chunks(0, n, kChunk, [&](int64_t c, int64_t lo, int64_t hi) {
-      for (int64_t i = lo; i < hi; ++i)
-        if (!std::isfinite(a[i])) { first[c] = i; return; }
+      const int64_t j = first_non_finite(a.data() + lo, hi - lo);
+      if (j >= 0) first[c] = lo + j;
     });
     for (int64_t f : first)
       if (f >= 0) {
@@ -419,7 +420,11 @@ void Trainer::adam_step() {
     step_size[k] = float(lr[k] / (1.0 - std::pow(b1, double(t))));
     bc2_sqrt[k] = float(std::sqrt(1.0 - std::pow(b2, double(t))));
   }
-  const float fb1 = float(b1), fb2 = float(b2), eps = float(options_.adam_eps);
+  AdamConstants constants;
+  constants.beta1 = float(b1);
+  constants.beta2 = float(b2);
+  constants.eps = float(options_.adam_eps);
+  auto rates = [&](ParamGroup k) { return AdamRates{step_size[int(k)], bc2_sqrt[int(k)]}; };
   std::vector<std::vector<float>*> params, grads, ms, vs;
   std::vector<ParamGroup> groups;
   auto collect = [&](GaussianSet<float>& s, std::vector<std::vector<float>*>* out) {
@@ -438,25 +443,19 @@ void Trainer::adam_step() {
     float* m = ms[a]->data();
     float* v = vs[a]->data();
     const ParamGroup group = groups[a];
-    // Rows of `stride` floats; within an SH row the first 3 (DC) and the other 45 use different rates.
-    const int64_t stride = group == ParamGroup::kShDc ? kShFloats : 1;
-    const int64_t rows = int64_t(params[a]->size()) / stride;
-    parallel_for_chunks(0, rows, kChunk, [&](int64_t, int64_t lo, int64_t hi) {
-      auto update = [&](int64_t i, int k) {
-        m[i] = fb1 * m[i] + (1.f - fb1) * gr[i];
-        v[i] = fb2 * v[i] + (1.f - fb2) * gr[i] * gr[i];
-        p[i] -= step_size[k] * m[i] / (std::sqrt(v[i]) / bc2_sqrt[k] + eps);
-      };
-      if (stride == 1) {
-        const int k = int(group);
-        for (int64_t i = lo; i < hi; ++i) update(i, k);
-      } else {
-        for (int64_t r = lo; r < hi; ++r) {
-          for (int64_t i = r * stride; i < r * stride + 3; ++i) update(i, int(ParamGroup::kShDc));
-          for (int64_t i = r * stride + 3; i < (r + 1) * stride; ++i) update(i, int(ParamGroup::kShRest));
-        }
-      }
-    });
+    // Within an SH row the first 3 floats (DC) and the other 45 use different rates.
+    if (group == ParamGroup::kShDc) {
+      const int64_t rows = int64_t(params[a]->size()) / kShFloats;
+      parallel_for_chunks(0, rows, kChunk, [&](int64_t, int64_t lo, int64_t hi) {
+        const int64_t o = lo * kShFloats;
+        adam_update_rows(p + o, gr + o, m + o, v + o, hi - lo, kShFloats, 3, constants, rates(ParamGroup::kShDc),
+                         rates(ParamGroup::kShRest));
+      });
+    } else {
+      parallel_for_chunks(0, int64_t(params[a]->size()), kChunk, [&](int64_t, int64_t lo, int64_t hi) {
+        adam_update(p + lo, gr + lo, m + lo, v + lo, hi - lo, constants, rates(group));
+      });
+    }
   }
 }
 

@@ -2,12 +2,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
 #include "core/parallel.h"
 #include "core/rng.h"
 #include "reconstruction/loss.h"
+#include "reconstruction/raster_internal.h"
 #include "reconstruction/rasterizer.h"
 #include "tests/reconstruction/test_scene.h"
 
@@ -64,6 +66,55 @@ TEST(RasterizerTest, TileKernelEqualsPerPixelReferenceBlend) {
       ASSERT_EQ(st.n_contrib[pix], last) << x << "," << y;
     }
   EXPECT_GT(stopped_pixels, 0);  // the transmittance stop was exercised
+}
+
+// The opacity-aware tile rectangles drop no pixel that the reference's 3-sigma tiles would blend:
+// per pixel, the blend over every Gaussian whose 3-sigma tile rectangle (the reference's getRect)
+// holds the pixel's tile, in depth order, equals the rasterizer's image. Low opacities and large
+// splats make the trimmed rectangles much smaller than the 3-sigma ones.
+TEST(RasterizerTest, OpacityAwareTilesKeepEveryContributingPixel) {
+  const Camera c = front_camera(90, 61);
+  const RasterCamera<double> cam = RasterCamera<double>::from(c);
+  GaussianSet<double> g = random_gaussians<double>(300, 33, 1.0, 0.15, 0.2);
+  for (size_t i = 0; i < g.size(); ++i)  // opacities from 0.001 to 0.9: many below the 3-sigma extent
+    g.opacity_logit[i] = inverse_sigmoid(0.001 + 0.9 * double((i * 37) % 100) / 99.0);
+  RasterState<double> st;
+  rasterize_forward(g, cam, RasterSettings<double>{}, &st);
+  std::vector<int> order;  // visible Gaussians by (depth, index), as the rasterizer sorts them
+  int64_t entries_3sigma = 0;
+  std::vector<std::array<int, 4>> rect3(g.size());
+  for (size_t i = 0; i < g.size(); ++i) {
+    if (st.radius[i] == 0) continue;
+    const double r = st.radius[i], px = st.mean2d[i * 2] - 0.5, py = st.mean2d[i * 2 + 1] - 0.5;
+    auto tile = [&](double v, int grid) { return std::clamp(int(std::floor(v / kTileSize)), 0, grid); };
+    rect3[i] = {tile(px - r, st.tiles_x), tile(py - r, st.tiles_y), tile(px + r + kTileSize - 1, st.tiles_x),
+                tile(py + r + kTileSize - 1, st.tiles_y)};
+    entries_3sigma += int64_t(rect3[i][2] - rect3[i][0]) * (rect3[i][3] - rect3[i][1]);
+    order.push_back(int(i));
+  }
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return float(st.depth[a]) < float(st.depth[b]); });
+  EXPECT_LT(double(st.num_entries()), 0.9 * double(entries_3sigma)) << "the scene should exercise the trimming";
+  for (int y = 0; y < c.height; ++y)
+    for (int x = 0; x < c.width; ++x) {
+      const int tx = x / kTileSize, ty = y / kTileSize;
+      double T = 1, rgb[3] = {0, 0, 0};
+      for (int gi : order) {
+        const auto& r = rect3[gi];
+        if (tx < r[0] || tx >= r[2] || ty < r[1] || ty >= r[3]) continue;
+        const double dx = st.mean2d[gi * 2] - (x + 0.5), dy = st.mean2d[gi * 2 + 1] - (y + 0.5);
+        const double power = -0.5 * (st.conic[gi * 3] * dx * dx + st.conic[gi * 3 + 2] * dy * dy) -
+                             st.conic[gi * 3 + 1] * dx * dy;
+        if (power > 0) continue;
+        const double alpha = std::min(0.99, st.opacity[gi] * std::exp(power));
+        if (alpha < 1.0 / 255) continue;
+        const double test_t = T * (1 - alpha);
+        if (test_t < 1e-4) break;
+        for (int ch = 0; ch < 3; ++ch) rgb[ch] += st.color[gi * 3 + ch] * alpha * T;
+        T = test_t;
+      }
+      const int64_t pix = int64_t(y) * c.width + x;
+      for (int ch = 0; ch < 3; ++ch) ASSERT_NEAR(st.image[pix * 3 + ch], rgb[ch], 1e-12) << x << "," << y;
+    }
 }
 
 // The float path (fast exp) against the double path on the same scene.
@@ -228,6 +279,65 @@ TEST(RasterizerTest, ResultsDoNotDependOnThreadCount) {
   EXPECT_EQ(std::memcmp(g1.position.data(), g2.position.data(), g1.position.size() * 4), 0);
   EXPECT_EQ(std::memcmp(g1.sh.data(), g2.sh.data(), g1.sh.size() * 4), 0);
   EXPECT_EQ(std::memcmp(g1.rotation.data(), g2.rotation.data(), g1.rotation.size() * 4), 0);
+}
+
+// The 8-lane tile kernels (AVX2) give the bits of the 4-lane ones: image,
+// transmittance, contributor counts and every gradient, on a scene with splats of all sizes, low
+// opacities and a background (so every branch of the blend is taken). Widths the CPU cannot run
+// are reported, not silently passed.
+TEST(RasterizerTest, EveryKernelWidthGivesTheSameBits) {
+  const Camera c = front_camera(93, 70);  // partial tiles on both edges
+  GaussianSet<float> g = random_gaussians<float>(3000, 12, 1.0, 0.12, 0.2);
+  for (size_t i = 0; i < g.size(); i += 7) g.opacity_logit[i] = -5.f;  // alpha near the 1/255 cut-off
+  RasterSettings<float> rs;
+  rs.background = {0.2f, 0.5f, 0.9f};
+  std::vector<float> target(size_t(c.width) * c.height * 3);
+  Rng rng(5, 0, 0);
+  for (float& v : target) v = float(rng.uniform_double());
+  const RasterCamera<float> cam = RasterCamera<float>::from(c);
+  struct Out {
+    RasterState<float> st;
+    GaussianSet<float> grad;
+    std::vector<float> ndc;
+  };
+  auto run = [&](int width, Out* out) {
+    EXPECT_TRUE(internal::set_tile_kernel_width(width));
+    rasterize_forward(g, cam, rs, &out->st);
+    std::vector<float> v;
+    photometric_loss<float>(out->st.image, target, nullptr, c.width, c.height, 0.2f, &v);
+    rasterize_backward(g, cam, rs, &out->st, v, &out->grad, &out->ndc);
+  };
+  const int native = internal::tile_kernel_width();
+  Out ref;
+  run(4, &ref);
+  auto same = [](const auto& a, const auto& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0;
+  };
+  int compared = 0;
+  for (int width : {8}) {
+    if (!internal::set_tile_kernel_width(width)) {
+      std::printf("tile kernel width %d: not supported by this CPU, not compared\n", width);
+      continue;
+    }
+    Out o;
+    run(width, &o);
+    ++compared;
+    EXPECT_TRUE(same(ref.st.image, o.st.image)) << width;
+    EXPECT_TRUE(same(ref.st.final_transmittance, o.st.final_transmittance)) << width;
+    EXPECT_TRUE(same(ref.st.n_contrib, o.st.n_contrib)) << width;
+    EXPECT_TRUE(same(ref.st.entry_grad, o.st.entry_grad)) << width;
+    EXPECT_TRUE(same(ref.grad.position, o.grad.position)) << width;
+    EXPECT_TRUE(same(ref.grad.log_scale, o.grad.log_scale)) << width;
+    EXPECT_TRUE(same(ref.grad.rotation, o.grad.rotation)) << width;
+    EXPECT_TRUE(same(ref.grad.opacity_logit, o.grad.opacity_logit)) << width;
+    EXPECT_TRUE(same(ref.grad.sh, o.grad.sh)) << width;
+    EXPECT_TRUE(same(ref.ndc, o.ndc)) << width;
+  }
+  EXPECT_TRUE(internal::set_tile_kernel_width(native));
+  EXPECT_FALSE(internal::set_tile_kernel_width(3));
+  EXPECT_FALSE(internal::set_tile_kernel_width(16));
+  EXPECT_EQ(internal::tile_kernel_width(), native);
+  std::printf("tile kernel widths compared with 4: %d (native %d)\n", compared, native);
 }
 
 }  // namespace

@@ -1,0 +1,33 @@
+// The trainer's element-wise kernels over the parameter arrays: the Adam update and the finiteness
+// scan. Both are branch-free loops that the compiler vectorizes; an AVX2 clone is chosen at run time
+// (GCC target_clones). Only IEEE element-wise operations (sqrt and division are correctly rounded)
+// and no fused multiply-add (-ffp-contract=off), so every clone gives the same bits.
+#pragma once
+
+#include <cstdint>
+
+namespace weathergs::recon {
+
+// One parameter group's Adam rates at this step: p -= step_size m / (sqrt(v) / bc2_sqrt + eps),
+// with step_size = lr / (1 - beta1^t) and bc2_sqrt = sqrt(1 - beta2^t) (the reference's torch.optim.Adam).
+struct AdamRates {
+  float step_size = 0;
+  float bc2_sqrt = 1;
+};
+
+struct AdamConstants {
+  float beta1 = 0.9f, beta2 = 0.999f, eps = 1e-15f;
+};
+
+// Updates n elements of one group (moments m, v in place).
+void adam_update(float* p, const float* grad, float* m, float* v, int64_t n, const AdamConstants& c, AdamRates rates);
+
+// Updates `rows` rows of `width` floats whose columns [0, split) use `first` and [split, width) use
+// `rest` (the SH rows: 3 DC coefficients, then 45 at a twentieth of the rate). width <= 64.
+void adam_update_rows(float* p, const float* grad, float* m, float* v, int64_t rows, int width, int split,
+                      const AdamConstants& c, AdamRates first, AdamRates rest);
+
+// Index of the first non-finite element of a[0, n), or -1.
+int64_t first_non_finite(const float* a, int64_t n);
+
+}  // namespace weathergs::recon
