@@ -76,6 +76,27 @@ inline void pixel_range(T mean, T half, int lo_clip, int hi_clip, int* lo, int* 
   *hi = int(b);
 }
 
+// Pixel range [*lo, *hi] (within [lo, hi] on entry) of row py where the splat record `sp` can reach
+// alpha >= 1/255: the row's chord of the ellipse d^T conic d <= sp[11], widened by one pixel, with
+// d = mean - pixel center. Empty (lo > hi) when the row misses the ellipse. Conservative like the
+// extents (the margin in sp[11] and the pixel), so restricting a row to it changes no result.
+template <typename T>
+inline void row_span(const T* sp, T inv_ca, int py, int* lo, int* hi) {
+  const T dy = sp[1] - (T(py) + T(0.5));
+  // q(dx) = ca dx^2 + 2 cb dx dy + cc dy^2 is smallest at dx = -cb dy / ca, where it is dy^2 (cc - cb^2 / ca).
+  const T rest = sp[11] - dy * dy * (sp[4] - sp[3] * sp[3] * inv_ca);
+  if (!(rest >= T(0))) {
+    *lo = *hi + 1;
+    return;
+  }
+  const T half = std::sqrt(rest * inv_ca) + T(1);
+  const T center = sp[0] + sp[3] * dy * inv_ca;  // the pixel center where dx = -cb dy / ca
+  int a, b;
+  pixel_range(center, half, *lo, *hi, &a, &b);
+  *lo = a;
+  *hi = b;
+}
+
 // The blend weight of the reference: power of the 2D Gaussian at offset (dx, dy) and
 // alpha = min(0.99, o exp(power)); shared by forward and backward so both see identical values.
 template <typename T>

@@ -15,6 +15,28 @@ namespace weathergs::recon {
 namespace {
 
 using namespace internal;
+// Whether any pixel center of tile (tx, ty) can get alpha >= 1/255 from the splat record `sp`: the
+// minimum over the tile's pixel-center rectangle of q(d) = d^T conic d (the splat's power is -q/2)
+// against q_max = 2 ln(255 o). q is convex, so the minimum is 0 with the mean inside the rectangle,
+// else on one of its edges, where it is a 1-D quadratic minimised in closed form. The margin (1e-3
+// absolute on q, 1e-4 relative; alpha changes by < 0.06 %) covers the float rounding of the
+// kernels' per-pixel power and exp (< 1e-5 on q), so no tile with a contributing pixel is dropped.
+// q_max = 2 ln(255 o) with that margin (the record's sp[11]).
+template <typename T>
+bool tile_touched(const T* sp, T q_max, T inv_ca, T inv_cc, int tx, int ty, int width, int height) {
+  const T ca = sp[2], cb = sp[3], cc = sp[4];
+  const T x_lo = T(tx * kTileSize) + T(0.5) - sp[0];
+  const T x_hi = T(std::min(width, (tx + 1) * kTileSize)) - T(0.5) - sp[0];
+  const T y_lo = T(ty * kTileSize) + T(0.5) - sp[1];
+  const T y_hi = T(std::min(height, (ty + 1) * kTileSize)) - T(0.5) - sp[1];
+  if (x_lo <= T(0) && x_hi >= T(0) && y_lo <= T(0) && y_hi >= T(0)) return true;
+  auto q = [&](T dx, T dy) { return ca * dx * dx + T(2) * cb * dx * dy + cc * dy * dy; };
+  T q_min = std::numeric_limits<T>::infinity();
+  for (T dx : {x_lo, x_hi}) q_min = std::min(q_min, q(dx, std::clamp(-cb * dx * inv_cc, y_lo, y_hi)));
+  for (T dy : {y_lo, y_hi}) q_min = std::min(q_min, q(std::clamp(-cb * dy * inv_ca, x_lo, x_hi), dy));
+  return q_min <= q_max;
+}
+
 template <typename T>
 void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const RasterSettings<T>& settings,
                 RasterState<T>* s) {
@@ -23,6 +45,7 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
     for (int64_t i = lo; i < hi; ++i) {
       s->radius[i] = 0;
       for (int k = 0; k < 4; ++k) s->rect[i * 4 + k] = 0;
+      s->tile_mask[i] = 0;
       const Vec3<T> p(g.position[i * 3], g.position[i * 3 + 1], g.position[i * 3 + 2]);
       const T z = cam.rotation.row(2).dot(p) + cam.translation.z();
       if (!(z > T(kNearPlane))) continue;  // also culls NaN
@@ -64,7 +87,8 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
       sp[5] = s->opacity[i]; sp[6] = color[0]; sp[7] = color[1]; sp[8] = color[2];
       sp[9] = alpha_extent(sp[5], a);
       sp[10] = alpha_extent(sp[5], c);
-      sp[11] = T(0);
+      // q limit of the per-row spans (raster_internal.h, row_span) with tile_touched's margin.
+      sp[11] = sp[9] < T(0) ? T(-1) : T(2) * std::log(T(255) * sp[5]) * T(1.0001) + T(1e-3);
       // Opacity-aware tiles: the kernels blend only pixels within the alpha extent, so tiles of the
       // 3-sigma rectangle that no such pixel reaches get no entry (same images and gradients, fewer
       // entries to bin, sort and replay). `radius` stays the reference's (densification uses it).
@@ -78,8 +102,37 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
         r[3] = std::min(y1, tile_floor_index(std::floor(pr.mean.y() + sp[10] - T(0.5)) + T(kTileSize), s->tiles_y));
         if (r[2] <= r[0] || r[3] <= r[1]) r[0] = r[1] = r[2] = r[3] = 0;
       }
+      // Tiles of the rectangle that the ellipse misses (its corners, for a tilted or elongated
+      // splat) get no entry either. A rectangle one tile high or wide is the ellipse's own extent,
+      // so all of its tiles are kept untested; rectangles of more than 64 tiles keep all of theirs.
+      const int area = (r[2] - r[0]) * (r[3] - r[1]);
+      if (area > 0 && area <= kMaskTiles) {
+        uint64_t mask = area == kMaskTiles ? ~uint64_t(0) : (uint64_t(1) << area) - 1;
+        if (r[2] - r[0] > 1 && r[3] - r[1] > 1) {
+          mask = 0;
+          const T q_max = sp[11], inv_ca = T(1) / sp[2], inv_cc = T(1) / sp[4];
+          for (int ty = r[1], b = 0; ty < r[3]; ++ty)
+            for (int tx = r[0]; tx < r[2]; ++tx, ++b)
+              if (tile_touched(sp, q_max, inv_ca, inv_cc, tx, ty, s->width, s->height)) mask |= uint64_t(1) << b;
+        }
+        s->tile_mask[i] = mask;
+        if (mask == 0) r[0] = r[1] = r[2] = r[3] = 0;
+      }
     }
   });
+}
+
+// Tiles of Gaussian i's rectangle that get an entry: bit b (row-major in the rectangle) of its mask.
+template <typename T>
+inline bool has_entry(const RasterState<T>& s, int64_t i, int b, int area) {
+  return area > kMaskTiles || ((s.tile_mask[i] >> b) & 1);
+}
+template <typename T>
+inline int64_t num_tile_entries(const RasterState<T>& s, int64_t i) {
+  const int32_t* r = &s.rect[i * 4];
+  const int64_t area = s.radius[i] > 0 ? int64_t(r[2] - r[0]) * (r[3] - r[1]) : 0;
+  if (area == 0 || area > kMaskTiles) return area;
+  return __builtin_popcountll(s.tile_mask[i]);
 }
 
 // Sorts the (depth bits << 32 | index) keys, which arrive in increasing index order: a stable LSD
@@ -115,10 +168,9 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   s->entry_offset.assign(n + 1, 0);
   keys->clear();
   for (int64_t i = 0; i < n; ++i) {
-    const int32_t* r = &s->rect[i * 4];
-    const int64_t area = s->radius[i] > 0 ? int64_t(r[2] - r[0]) * (r[3] - r[1]) : 0;
-    s->entry_offset[i + 1] = s->entry_offset[i] + area;
-    if (area == 0) continue;
+    const int64_t count = num_tile_entries(*s, i);
+    s->entry_offset[i + 1] = s->entry_offset[i] + count;
+    if (count == 0) continue;
     // Depth is > 0.2, so the float bit pattern orders like the value; ties go to the lower index.
     const float d = float(s->depth[i]);
     uint32_t bits;
@@ -128,29 +180,52 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   sort_by_depth(keys);
   const int64_t visible = int64_t(keys->size());
   const int64_t entries = s->entry_offset[n];
+  // Tile lists in two parallel passes over chunks of the depth order: each chunk counts its entries
+  // per tile, the counts become per-(chunk, tile) start positions (tile by tile, chunks in order),
+  // and each chunk scatters its Gaussians in depth order from its own starts: the same lists as one
+  // serial scatter in depth order, whatever the thread count.
+  auto for_each_tile = [&](int32_t gi, auto&& fn) {
+    const int32_t* r = &s->rect[int64_t(gi) * 4];
+    const int area = (r[2] - r[0]) * (r[3] - r[1]);
+    for (int ty = r[1], b = 0; ty < r[3]; ++ty)
+      for (int tx = r[0]; tx < r[2]; ++tx, ++b)
+        if (has_entry(*s, gi, b, area)) fn(ty * s->tiles_x + tx);
+  };
+  const int64_t chunks = num_chunks(0, visible, kGaussianChunk);
+  // The caller's buffer, by reference: a thread_local named inside the lambdas would be each worker's own.
+  static thread_local std::vector<int64_t> start_buffer;
+  std::vector<int64_t>& start = start_buffer;
+  start.assign(size_t(chunks) * num_tiles, 0);
+  parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+    int64_t* count = &start[size_t(c) * num_tiles];
+    for (int64_t rank = lo; rank < hi; ++rank)
+      for_each_tile(int32_t((*keys)[rank] & 0xffffffffu), [&](int t) { ++count[t]; });
+  });
   s->tile_offset.assign(num_tiles + 1, 0);
-  for (int64_t i = 0; i < n; ++i) {
-    if (s->entry_offset[i + 1] == s->entry_offset[i]) continue;
-    const int32_t* r = &s->rect[i * 4];
-    for (int ty = r[1]; ty < r[3]; ++ty)
-      for (int tx = r[0]; tx < r[2]; ++tx) ++s->tile_offset[ty * s->tiles_x + tx + 1];
+  for (int t = 0; t < num_tiles; ++t) {
+    int64_t run = s->tile_offset[t];
+    for (int64_t c = 0; c < chunks; ++c) {
+      const int64_t count = start[size_t(c) * num_tiles + t];
+      start[size_t(c) * num_tiles + t] = run;
+      run += count;
+    }
+    s->tile_offset[t + 1] = run;
   }
-  for (int t = 0; t < num_tiles; ++t) s->tile_offset[t + 1] += s->tile_offset[t];
   s->tile_gaussian.resize(entries);
   s->tile_rank.resize(entries);
   s->entry_of.resize(entries);
   s->splat_sorted.resize(size_t(visible) * kSplatFloats);
-  std::vector<int64_t> cursor(s->tile_offset.begin(), s->tile_offset.end() - 1);
-  for (int64_t rank = 0; rank < visible; ++rank) {
-    const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
-    const int32_t* r = &s->rect[int64_t(gi) * 4];
-    for (int ty = r[1]; ty < r[3]; ++ty)
-      for (int tx = r[0]; tx < r[2]; ++tx) {
-        const int64_t k = cursor[ty * s->tiles_x + tx]++;
+  parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+    int64_t* cursor = &start[size_t(c) * num_tiles];
+    for (int64_t rank = lo; rank < hi; ++rank) {
+      const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
+      for_each_tile(gi, [&](int t) {
+        const int64_t k = cursor[t]++;
         s->tile_gaussian[k] = gi;
         s->tile_rank[k] = int32_t(rank);
-      }
-  }
+      });
+    }
+  });
   parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
     for (int64_t rank = lo; rank < hi; ++rank) {
       const int64_t gi = int64_t((*keys)[rank] & 0xffffffffu);
@@ -162,7 +237,10 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
     for (int64_t k = s->tile_offset[t]; k < s->tile_offset[t + 1]; ++k) {
       const int32_t gi = s->tile_gaussian[k];
       const int32_t* r = &s->rect[int64_t(gi) * 4];
-      const int64_t j = int64_t(ty - r[1]) * (r[2] - r[0]) + (tx - r[0]);
+      const int area = (r[2] - r[0]) * (r[3] - r[1]);
+      const int b = (ty - r[1]) * (r[2] - r[0]) + (tx - r[0]);
+      // The entry's position among the Gaussian's entries (its tiles in row-major order).
+      const int64_t j = area > kMaskTiles ? b : __builtin_popcountll(s->tile_mask[gi] & ((uint64_t(1) << b) - 1));
       s->entry_of[s->entry_offset[gi] + j] = k;
     }
   });
@@ -263,6 +341,7 @@ void rasterize_forward(const GaussianSet<T>& g, const RasterCamera<T>& camera, c
   s->depth.resize(n);
   s->radius.resize(n);
   s->rect.resize(n * 4);
+  s->tile_mask.resize(n);
   s->clamped.resize(n);
   s->splat.resize(n * kSplatFloats);
   const size_t pixels = size_t(camera.width) * camera.height;

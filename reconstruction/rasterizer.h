@@ -3,7 +3,8 @@
 //
 // Forward: per Gaussian (parallel) projection, 2D covariance and SH colour; binning into 16x16 tiles
 // with the reference's 3-sigma radius, less the tiles where its alpha cannot reach 1/255 (the blend's
-// own cut-off, so images and gradients are unchanged); per-tile lists sorted by depth (ties by index); per tile
+// own cut-off, so images and gradients are unchanged: outside the alpha extent's box and, tested
+// exactly, outside its ellipse); per-tile lists sorted by depth (ties by index); per tile
 // (parallel) front-to-back blending. Backward: per tile (parallel) back-to-front replay of each
 // pixel's blend, one gradient slot per (tile, Gaussian) entry; then per Gaussian (parallel) the slots
 // are summed in tile order and pulled back to the parameters. No float atomics, no per-thread
@@ -28,6 +29,7 @@ struct RasterSettings {
 // Everything the forward pass produces and the backward pass consumes. Reused between iterations
 // (vectors keep their capacity).
 constexpr int kSplatFloats = 12;
+constexpr int kMaskTiles = 64;
 
 template <typename T>
 struct RasterState {
@@ -42,9 +44,13 @@ struct RasterState {
   std::vector<int32_t> radius;   // N, reference radius in px; 0 = not rendered
   std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive): the 3-sigma rectangle's
                                  // tiles that pixels with alpha >= 1/255 can lie in; may be empty
+  std::vector<uint64_t> tile_mask;  // N: bit b set when tile b (row-major) of a rect of at most
+                                    // kMaskTiles tiles meets the alpha >= 1/255 ellipse; larger
+                                    // rects have an entry in every tile
   std::vector<uint8_t> clamped;  // N, bit c set when colour channel c was clamped at 0
   // Packed per-Gaussian record read by the tile loops (one cache line): mean x, y, conic a, b, c,
-  // opacity, r, g, b, and the half extents (px) of the region where alpha can reach 1/255.
+  // opacity, r, g, b, the half extents (px) of the region where alpha can reach 1/255, and the
+  // largest d^T conic d there (2 ln(255 o) with a rounding margin; -1 when alpha never reaches it).
   std::vector<T> splat;          // N x kSplatFloats
   std::vector<int64_t> entry_offset;  // N + 1: first entry of each Gaussian in entry_of
   // Per tile.
