@@ -21,6 +21,17 @@ using testing::random_gaussians;
 
 Camera front_camera(int w, int h) { return look_at_camera("c", w, h, 0.9 * w, Eigen::Vector3d(0.2, -4, 0.5)); }
 
+// The reference's blend weight of Gaussian gi at pixel (x, y), or 0 where the blend skips it
+// (power > 0 or alpha < 1/255): written independently of the tile kernels.
+double reference_alpha(const RasterState<double>& st, int gi, int x, int y) {
+  const double dx = st.mean2d[gi * 2] - (x + 0.5), dy = st.mean2d[gi * 2 + 1] - (y + 0.5);
+  const double power =
+      -0.5 * (st.conic[gi * 3] * dx * dx + st.conic[gi * 3 + 2] * dy * dy) - st.conic[gi * 3 + 1] * dx * dy;
+  if (power > 0) return 0;
+  const double alpha = std::min(0.99, st.opacity[gi] * std::exp(power));
+  return alpha < 1.0 / 255 ? 0 : alpha;
+}
+
 // The reference per-pixel loop (every Gaussian of the pixel's tile list, no bounding box), written
 // independently of the tile kernel.
 TEST(RasterizerTest, TileKernelEqualsPerPixelReferenceBlend) {
@@ -47,12 +58,8 @@ TEST(RasterizerTest, TileKernelEqualsPerPixelReferenceBlend) {
       int last = 0;
       for (int64_t k = st.tile_offset[t]; k < st.tile_offset[t + 1]; ++k) {
         const int gi = st.tile_gaussian[k];
-        const double dx = st.mean2d[gi * 2] - (x + 0.5), dy = st.mean2d[gi * 2 + 1] - (y + 0.5);
-        const double power = -0.5 * (st.conic[gi * 3] * dx * dx + st.conic[gi * 3 + 2] * dy * dy) -
-                             st.conic[gi * 3 + 1] * dx * dy;
-        if (power > 0) continue;
-        const double alpha = std::min(0.99, st.opacity[gi] * std::exp(power));
-        if (alpha < 1.0 / 255) continue;
+        const double alpha = reference_alpha(st, gi, x, y);
+        if (alpha == 0) continue;
         const double test_t = T * (1 - alpha);
         if (test_t < 1e-4) { ++stopped_pixels; break; }
         for (int ch = 0; ch < 3; ++ch) rgb[ch] += st.color[gi * 3 + ch] * alpha * T;
@@ -101,12 +108,8 @@ TEST(RasterizerTest, OpacityAwareTilesKeepEveryContributingPixel) {
       for (int gi : order) {
         const auto& r = rect3[gi];
         if (tx < r[0] || tx >= r[2] || ty < r[1] || ty >= r[3]) continue;
-        const double dx = st.mean2d[gi * 2] - (x + 0.5), dy = st.mean2d[gi * 2 + 1] - (y + 0.5);
-        const double power = -0.5 * (st.conic[gi * 3] * dx * dx + st.conic[gi * 3 + 2] * dy * dy) -
-                             st.conic[gi * 3 + 1] * dx * dy;
-        if (power > 0) continue;
-        const double alpha = std::min(0.99, st.opacity[gi] * std::exp(power));
-        if (alpha < 1.0 / 255) continue;
+        const double alpha = reference_alpha(st, gi, x, y);
+        if (alpha == 0) continue;
         const double test_t = T * (1 - alpha);
         if (test_t < 1e-4) break;
         for (int ch = 0; ch < 3; ++ch) rgb[ch] += st.color[gi * 3 + ch] * alpha * T;
