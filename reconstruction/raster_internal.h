@@ -57,14 +57,22 @@ inline float blend_exp(float x) {
 }
 inline double blend_exp(double x) { return std::exp(x); }
 
-// Half extent (px) of the region where a Gaussian's alpha can reach 1/255: the bounding box of the
-// ellipse d^T conic d <= 2 ln(255 o), widened by one pixel against rounding. Outside it the blend
-// skips every pixel anyway, so restricting the loops to it does not change the result. Negative
-// when the opacity alone is below 1/255 (alpha <= o can never reach it).
+// The largest d^T conic d at which alpha = o exp(-d^T conic d / 2) still reaches 1/255:
+// 2 ln(255 o); -1 when the opacity alone is below 1/255 (alpha <= o can never reach it).
 template <typename T>
-inline T alpha_extent(T opacity, T cov_diag) {
+inline T alpha_q_max(T opacity) {
   if (!(opacity >= T(kAlphaMin))) return T(-1);
-  return std::sqrt(T(2) * std::log(T(255) * opacity) * cov_diag) + T(1);
+  return T(2) * std::log(T(255) * opacity);
+}
+
+// Half extent (px), along an axis with 2D variance cov_diag, of the region where a Gaussian's alpha
+// can reach 1/255: the bounding box of the ellipse d^T conic d <= q_max (alpha_q_max), widened by
+// one pixel against rounding. Outside it the blend skips every pixel anyway, so restricting the
+// loops to it does not change the result. Negative when q_max is.
+template <typename T>
+inline T alpha_extent(T q_max, T cov_diag) {
+  if (q_max < T(0)) return T(-1);
+  return std::sqrt(q_max * cov_diag) + T(1);
 }
 
 // Pixel range [lo, hi] of centers (i + 0.5) within `half` of `mean`, clipped to [lo_clip, hi_clip].

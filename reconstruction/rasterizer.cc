@@ -85,10 +85,11 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
       T* sp = &s->splat[i * kSplatFloats];
       sp[0] = pr.mean.x(); sp[1] = pr.mean.y(); sp[2] = conic_a; sp[3] = conic_b; sp[4] = conic_c;
       sp[5] = s->opacity[i]; sp[6] = color[0]; sp[7] = color[1]; sp[8] = color[2];
-      sp[9] = alpha_extent(sp[5], a);
-      sp[10] = alpha_extent(sp[5], c);
+      const T q_max = alpha_q_max(sp[5]);
+      sp[9] = alpha_extent(q_max, a);
+      sp[10] = alpha_extent(q_max, c);
       // q limit of the per-row spans (raster_internal.h, row_span) with tile_touched's margin.
-      sp[11] = sp[9] < T(0) ? T(-1) : T(2) * std::log(T(255) * sp[5]) * T(1.0001) + T(1e-3);
+      sp[11] = q_max < T(0) ? T(-1) : q_max * T(1.0001) + T(1e-3);
       // Opacity-aware tiles: the kernels blend only pixels within the alpha extent, so tiles of the
       // 3-sigma rectangle that no such pixel reaches get no entry (same images and gradients, fewer
       // entries to bin, sort and replay). `radius` stays the reference's (densification uses it).
@@ -110,10 +111,10 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
         uint64_t mask = area == kMaskTiles ? ~uint64_t(0) : (uint64_t(1) << area) - 1;
         if (r[2] - r[0] > 1 && r[3] - r[1] > 1) {
           mask = 0;
-          const T q_max = sp[11], inv_ca = T(1) / sp[2], inv_cc = T(1) / sp[4];
+          const T inv_ca = T(1) / sp[2], inv_cc = T(1) / sp[4];
           for (int ty = r[1], b = 0; ty < r[3]; ++ty)
             for (int tx = r[0]; tx < r[2]; ++tx, ++b)
-              if (tile_touched(sp, q_max, inv_ca, inv_cc, tx, ty, s->width, s->height)) mask |= uint64_t(1) << b;
+              if (tile_touched(sp, sp[11], inv_ca, inv_cc, tx, ty, s->width, s->height)) mask |= uint64_t(1) << b;
         }
         s->tile_mask[i] = mask;
         if (mask == 0) r[0] = r[1] = r[2] = r[3] = 0;
@@ -215,33 +216,20 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   s->tile_rank.resize(entries);
   s->entry_of.resize(entries);
   s->splat_sorted.resize(size_t(visible) * kSplatFloats);
+  // The same pass records, per Gaussian, its entries in its tiles' row-major order (entry_of), and
+  // copies the records into depth order.
   parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
     int64_t* cursor = &start[size_t(c) * num_tiles];
     for (int64_t rank = lo; rank < hi; ++rank) {
       const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
+      int64_t j = s->entry_offset[gi];
       for_each_tile(gi, [&](int t) {
         const int64_t k = cursor[t]++;
         s->tile_gaussian[k] = gi;
         s->tile_rank[k] = int32_t(rank);
+        s->entry_of[j++] = k;
       });
-    }
-  });
-  parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
-    for (int64_t rank = lo; rank < hi; ++rank) {
-      const int64_t gi = int64_t((*keys)[rank] & 0xffffffffu);
-      std::copy_n(&s->splat[gi * kSplatFloats], kSplatFloats, &s->splat_sorted[rank * kSplatFloats]);
-    }
-  });
-  parallel_for(0, num_tiles, [&](int64_t t) {
-    const int tx = int(t % s->tiles_x), ty = int(t / s->tiles_x);
-    for (int64_t k = s->tile_offset[t]; k < s->tile_offset[t + 1]; ++k) {
-      const int32_t gi = s->tile_gaussian[k];
-      const int32_t* r = &s->rect[int64_t(gi) * 4];
-      const int area = (r[2] - r[0]) * (r[3] - r[1]);
-      const int b = (ty - r[1]) * (r[2] - r[0]) + (tx - r[0]);
-      // The entry's position among the Gaussian's entries (its tiles in row-major order).
-      const int64_t j = area > kMaskTiles ? b : __builtin_popcountll(s->tile_mask[gi] & ((uint64_t(1) << b) - 1));
-      s->entry_of[s->entry_offset[gi] + j] = k;
+      std::copy_n(&s->splat[int64_t(gi) * kSplatFloats], kSplatFloats, &s->splat_sorted[rank * kSplatFloats]);
     }
   });
 }
