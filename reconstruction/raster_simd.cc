@@ -189,18 +189,25 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
       bg_dot[p] = bg[0] * d_r[p] + bg[1] * d_g[p] + bg[2] * d_b[p];
     }
   const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
-  std::fill(s->entry_grad.begin() + begin * kEntryGrads, s->entry_grad.begin() + end * kEntryGrads, 0.f);
+  // Each entry's 9 sums go to its slot in the per-Gaussian order (entry_slot), which the reduction
+  // then reads sequentially; entries that are not replayed get zeros.
+  auto slot = [&](int64_t k) { return &s->entry_grad[s->entry_slot[begin + k] * kEntryGrads]; };
+  for (int64_t k = kmax; k < end - begin; ++k) std::fill_n(slot(k), kEntryGrads, 0.f);
   const vf lane_center = lane_centers<W>(x0);
   const vf zero = splat<vf>(0.f), alpha_max = splat<vf>(float(kAlphaMax));
   constexpr int32_t kPrefetch = 8;
   for (int32_t k = kmax - 1; k >= 0; --k) {
     if (k >= kPrefetch) __builtin_prefetch(&s->splat_sorted[int64_t(s->tile_rank[begin + k - kPrefetch]) * kSplatFloats]);
     const float* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
-    if (sp[9] < 0.f) continue;
-    int px0, px1, py0, py1;
-    pixel_range(sp[0], sp[9], x0, x1 - 1, &px0, &px1);
-    pixel_range(sp[1], sp[10], y0, y1 - 1, &py0, &py1);
-    if (px0 > px1 || py0 > py1) continue;
+    int px0 = 0, px1 = -1, py0 = 0, py1 = -1;
+    if (sp[9] >= 0.f) {
+      pixel_range(sp[0], sp[9], x0, x1 - 1, &px0, &px1);
+      pixel_range(sp[1], sp[10], y0, y1 - 1, &py0, &py1);
+    }
+    if (px0 > px1 || py0 > py1) {
+      std::fill_n(slot(k), kEntryGrads, 0.f);
+      continue;
+    }
     const vf mx = splat<vf>(sp[0]), ca = splat<vf>(sp[2]), cb = splat<vf>(sp[3]), cc = splat<vf>(sp[4]);
     const vf o = splat<vf>(sp[5]), cr = splat<vf>(sp[6]), cg = splat<vf>(sp[7]), cbl = splat<vf>(sp[8]);
     const vi kv = vi{} + k;
@@ -268,7 +275,7 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
         }
       }
     }
-    float* eg = &s->entry_grad[(begin + k) * kEntryGrads];
+    float* eg = slot(k);
     for (int j = 0; j < kEntryGrads; ++j) eg[j] = hsum4(acc[j]);
   }
 }

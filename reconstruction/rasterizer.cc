@@ -214,10 +214,10 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   }
   s->tile_gaussian.resize(entries);
   s->tile_rank.resize(entries);
-  s->entry_of.resize(entries);
+  s->entry_slot.resize(entries);
   s->splat_sorted.resize(size_t(visible) * kSplatFloats);
-  // The same pass records, per Gaussian, its entries in its tiles' row-major order (entry_of), and
-  // copies the records into depth order.
+  // The same pass gives each entry its slot in the per-Gaussian order (the Gaussian's tiles in
+  // row-major order: entry_slot), and copies the records into depth order.
   parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
     int64_t* cursor = &start[size_t(c) * num_tiles];
     for (int64_t rank = lo; rank < hi; ++rank) {
@@ -227,7 +227,7 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
         const int64_t k = cursor[t]++;
         s->tile_gaussian[k] = gi;
         s->tile_rank[k] = int32_t(rank);
-        s->entry_of[j++] = k;
+        s->entry_slot[k] = j++;
       });
       std::copy_n(&s->splat[int64_t(gi) * kSplatFloats], kSplatFloats, &s->splat_sorted[rank * kSplatFloats]);
     }
@@ -389,17 +389,25 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
         bg_dot[p] = bg[0] * d_r[p] + bg[1] * d_g[p] + bg[2] * d_b[p];
       }
     const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
-    std::fill(s->entry_grad.begin() + begin * kEntryGrads, s->entry_grad.begin() + end * kEntryGrads, T(0));
+    // Sums go to each entry's slot in the per-Gaussian order; entries not replayed get zeros.
+    auto slot = [&](int64_t k) { return &s->entry_grad[s->entry_slot[begin + k] * kEntryGrads]; };
+    for (int64_t k = kmax; k < end - begin; ++k) std::fill_n(slot(k), kEntryGrads, T(0));
     alignas(64) T lane[kEntryGrads][kTileSize];
     for (int32_t k = kmax - 1; k >= 0; --k) {
       const T* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
-      if (sp[9] < T(0)) continue;
+      if (sp[9] < T(0)) {
+        std::fill_n(slot(k), kEntryGrads, T(0));
+        continue;
+      }
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T cr = sp[6], cg = sp[7], cbl = sp[8];
       int px0, px1, py0, py1;
       pixel_range(mx, sp[9], x0, x1 - 1, &px0, &px1);
       pixel_range(my, sp[10], y0, y1 - 1, &py0, &py1);
-      if (px0 > px1 || py0 > py1) continue;
+      if (px0 > px1 || py0 > py1) {
+        std::fill_n(slot(k), kEntryGrads, T(0));
+        continue;
+      }
       for (int j = 0; j < kEntryGrads; ++j)
         for (int c = 0; c < kTileSize; ++c) lane[j][c] = T(0);
       for (int py = py0; py <= py1; ++py) {
@@ -446,7 +454,7 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
           lane[5][l] += gauss * va;
         }
       }
-      T* eg = &s->entry_grad[(begin + k) * kEntryGrads];
+      T* eg = slot(k);
       for (int j = 0; j < kEntryGrads; ++j) {
         T sum = T(0);
         for (int c = 0; c < kTileSize; ++c) sum += lane[j][c];
@@ -478,7 +486,7 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
       }
       T eg[kEntryGrads] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
       for (int64_t j = s->entry_offset[i]; j < s->entry_offset[i + 1]; ++j) {
-        const T* e = &s->entry_grad[s->entry_of[j] * kEntryGrads];
+        const T* e = &s->entry_grad[j * kEntryGrads];
         for (int k = 0; k < kEntryGrads; ++k) eg[k] += e[k];
       }
       if (v_mean2d_ndc) {

@@ -52,18 +52,20 @@ struct RasterState {
   // opacity, r, g, b, the half extents (px) of the region where alpha can reach 1/255, and the
   // largest d^T conic d there (2 ln(255 o) with a rounding margin; -1 when alpha never reaches it).
   std::vector<T> splat;          // N x kSplatFloats
-  std::vector<int64_t> entry_offset;  // N + 1: first entry of each Gaussian in entry_of
+  std::vector<int64_t> entry_offset;  // N + 1: first slot of each Gaussian in the per-Gaussian order
   // Per tile.
   std::vector<int64_t> tile_offset;   // tiles + 1
   std::vector<int32_t> tile_gaussian; // entries: Gaussian ids, each tile's range sorted by depth
   std::vector<int32_t> tile_rank;     // entries: depth rank of the Gaussian (index into splat_sorted)
   std::vector<T> splat_sorted;        // visible Gaussians' records in depth order
-  std::vector<int64_t> entry_of;      // entries: per Gaussian, its tiles' entry indices, tile order
+  std::vector<int64_t> entry_slot;    // entries: the entry's slot in the per-Gaussian order (each
+                                      // Gaussian's entries contiguous, its tiles in row-major order)
   // Per pixel.
   std::vector<T> image;          // H x W x 3
   std::vector<T> final_transmittance;  // H x W
   std::vector<int32_t> n_contrib;      // H x W: entries [0, n) of the tile list were visited
-  // Scratch of the backward pass: 9 gradients per entry (mean x/y, conic a/b/c, opacity, rgb).
+  // Scratch of the backward pass: 9 gradients per entry (mean x/y, conic a/b/c, opacity, rgb), at
+  // the entry's slot in the per-Gaussian order, so that the per-Gaussian sums read them in sequence.
   std::vector<T> entry_grad;
 
   int64_t num_entries() const { return tile_offset.empty() ? 0 : tile_offset.back(); }
