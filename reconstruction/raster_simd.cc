@@ -96,6 +96,17 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
   }
   const int64_t npix = int64_t(x1 - x0) * (y1 - y0);
   int64_t num_done = 0;
+  // Per tile row, bit x set when pixel x is done (stopped, or outside the image). A row whose pixels
+  // in a Gaussian's range are all done is skipped: those pixels would not change (measured on the
+  // bench scene: a tile list holds ~800 entries, its pixels' last contributors are at ~120 on
+  // average, and tiles with a few unsaturated pixels run through the whole list).
+  uint32_t row_done[kTileSize];
+  auto refresh_row = [&](int r) {
+    uint32_t bits = 0;
+    for (int x = 0; x < kTileSize; ++x) bits |= uint32_t(done[r * kTileSize + x] != 0) << x;
+    row_done[r] = bits;
+  };
+  for (int r = 0; r < kTileSize; ++r) refresh_row(r);
   const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
   const vf lane_center = lane_centers<W>(x0);
   constexpr int64_t kPrefetch = 8;  // records are scattered over memory: fetch ahead of use
@@ -111,8 +122,10 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     const vf o = splat<vf>(sp[5]), r = splat<vf>(sp[6]), g = splat<vf>(sp[7]), b = splat<vf>(sp[8]);
     const vi contributor = vi{} + int32_t(k - begin + 1);
     const int bx0 = ((px0 - x0) / W) * W, bx1 = px1 - x0;
+    const uint32_t span = ((uint32_t(2) << (px1 - x0)) - 1) & ~((uint32_t(1) << (px0 - x0)) - 1);
     vi stopped = {};
     for (int py = py0; py <= py1; ++py) {
+      if ((row_done[py - y0] & span) == span) continue;
       const vf dy = splat<vf>(sp[1] - (float(py) + 0.5f));
       const int row = (py - y0) * kTileSize;
       for (int bx = bx0; bx <= bx1; bx += W) {
@@ -135,7 +148,12 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
         stopped -= stop;
       }
     }
-    for (int l = 0; l < W; ++l) num_done += stopped[l];
+    int64_t entry_stops = 0;
+    for (int l = 0; l < W; ++l) entry_stops += stopped[l];
+    if (entry_stops > 0) {
+      num_done += entry_stops;
+      for (int py = py0; py <= py1; ++py) refresh_row(py - y0);
+    }
   }
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) {
