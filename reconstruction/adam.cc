@@ -4,16 +4,11 @@
 #include <cstring>
 
 #include "core/error.h"
+#include "reconstruction/cpu_clones.h"
 
 namespace weathergs::recon {
 
 namespace {
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define WGS_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define WGS_CLONES
-#endif
 
 // The update of one element, in the order of the reference's arithmetic.
 inline void update(float& p, float g, float& m, float& v, const AdamConstants& c, float step_size, float bc2_sqrt) {
@@ -22,12 +17,12 @@ inline void update(float& p, float g, float& m, float& v, const AdamConstants& c
   p -= step_size * m / (std::sqrt(v) / bc2_sqrt + c.eps);
 }
 
-WGS_CLONES void update_span(float* __restrict p, const float* __restrict grad, float* __restrict m,
+WGS_AVX2_CLONES void update_span(float* __restrict p, const float* __restrict grad, float* __restrict m,
                             float* __restrict v, int64_t n, AdamConstants c, float step_size, float bc2_sqrt) {
   for (int64_t i = 0; i < n; ++i) update(p[i], grad[i], m[i], v[i], c, step_size, bc2_sqrt);
 }
 
-WGS_CLONES void update_rows(float* __restrict p, const float* __restrict grad, float* __restrict m,
+WGS_AVX2_CLONES void update_rows(float* __restrict p, const float* __restrict grad, float* __restrict m,
                             float* __restrict v, int64_t rows, int width, AdamConstants c,
                             const float* __restrict step_size, const float* __restrict bc2_sqrt) {
   for (int64_t r = 0; r < rows; ++r) {
@@ -38,7 +33,7 @@ WGS_CLONES void update_rows(float* __restrict p, const float* __restrict grad, f
 
 // Non-zero when some element is Inf or NaN (exponent bits all set); integer operations only, so the
 // loop vectorizes and never traps.
-WGS_CLONES uint32_t any_non_finite(const float* __restrict a, int64_t n) {
+WGS_AVX2_CLONES uint32_t any_non_finite(const float* __restrict a, int64_t n) {
   uint32_t bad = 0;
   for (int64_t i = 0; i < n; ++i) {
     uint32_t bits;

@@ -1,7 +1,6 @@
 // The trainer's element-wise kernels over the parameter arrays: the Adam update and the finiteness
-// scan. Both are branch-free loops that the compiler vectorizes; an AVX2 clone is chosen at run time
-// (GCC target_clones). Only IEEE element-wise operations (sqrt and division are correctly rounded)
-// and no fused multiply-add (-ffp-contract=off), so every clone gives the same bits.
+// scan. Both are branch-free loops that the compiler vectorizes, with an AVX2 clone (cpu_clones.h);
+// sqrt and division are correctly rounded, so every clone gives the same bits.
 #pragma once
 
 #include <cstdint>

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
+#include "reconstruction/cpu_clones.h"
 
 namespace weathergs::recon {
 
@@ -31,13 +32,8 @@ namespace {
 
 constexpr int kHalf = kSsimWindow / 2;
 
-// y[x] += a s[x], the inner loop of both blur passes. The float version (training) has an AVX2 clone
-// chosen at run time; element-wise multiply and add without contraction (-ffp-contract=off), so the
-// clones give the same bits.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-void axpy(float* __restrict y, const float* __restrict s, float a, int n) {
+// y[x] += a s[x], the inner loop of both blur passes; the float version (training) with an AVX2 clone.
+WGS_AVX2_CLONES void axpy(float* __restrict y, const float* __restrict s, float a, int n) {
   for (int x = 0; x < n; ++x) y[x] += a * s[x];
 }
 void axpy(double* __restrict y, const double* __restrict s, double a, int n) {

@@ -118,11 +118,9 @@ void render_tile_simd(const RasterSettings<float>& settings, RasterState<float>*
 void backward_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, const std::vector<float>& v_image,
                         int64_t tile);
 
-
 // The lane count of the tile kernels: 8 where the CPU has AVX2, else 4, chosen once per process.
 // set_tile_kernel_width switches it (tests, benchmarks); it returns false and changes nothing for a
-// width other than 4 or 8 or one the CPU cannot run. Not to be
-// called while a rasterization runs.
+// width other than 4 or 8 or one the CPU cannot run. Not to be called while a rasterization runs.
 int tile_kernel_width();
 bool set_tile_kernel_width(int width);
 

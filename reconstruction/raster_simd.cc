@@ -5,12 +5,11 @@
 // compiles with -ffp-contract=off: reconstruction/CMakeLists.txt), so both widths give
 // bit-identical images and gradients (test reconstruction/rasterizer). A 16-lane AVX-512F variant of
 // this template was measured 2.6x slower than 8 lanes (130 vs 50 ms per iteration, bench_reconstruction
-// 300x200/50k, 2026-11-24) and is not built. The lanes of a block that lie
-// outside a Gaussian's alpha extent get alpha < 1/255 and are skipped by the same test as any other
-// pixel, so wider blocks change the work, never the result.
+// 300x200/50k, 2026-11-24) and is not built. The lanes of a block that lie outside a Gaussian's
+// alpha extent get alpha < 1/255 and are skipped by the same test as any other pixel, so wider
+// blocks change the work, never the result.
 #include <algorithm>
 #include <atomic>
-#include <cstdlib>
 #include <cstring>
 
 #include "reconstruction/raster_internal.h"
@@ -298,10 +297,11 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
   }
 }
 
-void render_w4(const RasterSettings<float>& st, RasterState<float>* s, int64_t t) { render_tile<4>(st, s, t); }
 bool has_background(const RasterSettings<float>& st) {
   return st.background[0] != 0.f || st.background[1] != 0.f || st.background[2] != 0.f;
 }
+
+void render_w4(const RasterSettings<float>& st, RasterState<float>* s, int64_t t) { render_tile<4>(st, s, t); }
 
 void backward_w4(const RasterSettings<float>& st, RasterState<float>* s, const std::vector<float>& v, int64_t t) {
   if (has_background(st)) backward_tile<4, true>(st, s, v, t);
