@@ -3,16 +3,17 @@
 # The parts in build order (a part comes after every part it needs), and the parts each one needs.
 # A part's libraries may link exactly the parts it needs (and core); anything else is a configure
 # error (docs/architecture.md).
-set(WEATHERGS_ALL_PARTS evaluator generator reconstruction restoration datagen study)
+set(WEATHERGS_ALL_PARTS evaluator generator reconstruction restoration nerf datagen study)
 set(WEATHERGS_PART_NEEDS_evaluator "")
 set(WEATHERGS_PART_NEEDS_generator "")
 set(WEATHERGS_PART_NEEDS_reconstruction "")
 set(WEATHERGS_PART_NEEDS_restoration "")
+set(WEATHERGS_PART_NEEDS_nerf "")
 # datagen makes whole benchmark datasets (Blender, the generator, COLMAP): one layer above the generator.
 set(WEATHERGS_PART_NEEDS_datagen "generator")
 # study runs whole methods on datasets (train, render, evaluate; COLMAP points when a dataset has
 # none): the top library layer, below apps only.
-set(WEATHERGS_PART_NEEDS_study "reconstruction;restoration;evaluator;datagen")
+set(WEATHERGS_PART_NEEDS_study "reconstruction;restoration;nerf;evaluator;datagen")
 
 set(WEATHERGS_ALLOWED_DEPS_core "")
 foreach(part IN LISTS WEATHERGS_ALL_PARTS)

@@ -1,10 +1,18 @@
 #include "core/progress.h"
 
+#include <sys/resource.h>
+
 #include <unistd.h>
 
 #include <cstdio>
 
 namespace weathergs {
+
+double peak_rss_mb() {
+  struct rusage ru {};
+  getrusage(RUSAGE_SELF, &ru);
+  return double(ru.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();

@@ -11,6 +11,9 @@
 
 namespace weathergs {
 
+// Peak resident set size of this process in MiB (getrusage).
+double peak_rss_mb();
+
 // Wall-clock seconds elapsed since t (steady clock).
 double seconds_since(std::chrono::steady_clock::time_point t);
 

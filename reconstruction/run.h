@@ -20,36 +20,21 @@
 #include <vector>
 
 #include "core/dataset.h"
+#include "core/train_views.h"
 #include "reconstruction/trainer.h"
 
 namespace weathergs::recon {
 
-// Which of the dataset's image folders a run trains on.
-enum class TrainImages { kImages, kClean };
-// Which of the dataset's ground-truth masks are excluded from the loss (255 = masked out).
-enum class TrainMasks { kNone, kLens, kParticles, kAll /* lens or particles */ };
-const char* to_string(TrainImages images);
-const char* to_string(TrainMasks masks);
-TrainImages parse_train_images(const std::string& text, const std::string& where);  // InputError
-TrainMasks parse_train_masks(const std::string& text, const std::string& where);
-
-// The images and masks of a run: a dataset folder (by kind) or an outside folder of <view>.png.
-struct TrainInputs {
-  TrainImages images = TrainImages::kImages;
-  std::string images_dir;               // non-empty: <images_dir>/<view>.png instead of `images`
-  TrainMasks masks = TrainMasks::kNone;
-  std::string masks_dir;                // non-empty: <masks_dir>/<view>.png (255 = masked out)
-  // Non-empty: the COLMAP text model (points3D.txt) to initialize from instead of the dataset's
-  // sparse/0, e.g. sparse_clean/0 for the oracle.
-  std::string points_dir;
-
-  void validate(const std::string& where) const;  // InputError naming the field and the rule
-  bool operator==(const TrainInputs& o) const {
-    return images == o.images && images_dir == o.images_dir && masks == o.masks && masks_dir == o.masks_dir &&
-           points_dir == o.points_dir;
-  }
-  std::string to_string() const;
-};
+// The training inputs (which images, masks and points) and the loaded views have their home in
+// core/train_views.h: the NeRF backend (nerf/) reads the same ones.
+using weathergs::load_train_views;
+using weathergs::parse_train_images;
+using weathergs::parse_train_masks;
+using weathergs::to_string;
+using weathergs::TrainImages;
+using weathergs::TrainInputs;
+using weathergs::TrainMasks;
+using weathergs::TrainView;
 
 struct TrainRunOptions {
   std::string dataset;          // dataset root
@@ -66,9 +51,6 @@ struct TrainRunOptions {
   // InputError naming the field, its value and the rule (dataset and out required, ...).
   void validate() const;
 };
-
-// Loads the dataset's train-split views with the chosen images and masks. InputError names the file.
-std::vector<TrainView> load_train_views(const Dataset& dataset, const TrainInputs& inputs);
 
 // Initial Gaussians: COLMAP points3D.txt of inputs.points_dir (which must hold one) or else of the
 // dataset's sparse/0 when present and non-empty, else random (init_random.h).

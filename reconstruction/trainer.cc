@@ -1,7 +1,5 @@
 #include "reconstruction/trainer.h"
 
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -234,11 +232,6 @@ double scene_extent(const std::vector<Camera>& cameras) {
   return max_dist > 0 ? max_dist * 1.1 : 1.0;
 }
 
-double peak_rss_mb() {
-  struct rusage ru {};
-  getrusage(RUSAGE_SELF, &ru);
-  return double(ru.ru_maxrss) / 1024.0;  // Linux reports KiB
-}
 
 // ---------------------------------------------------------------------------------------------
 // Trainer

@@ -11,6 +11,8 @@
 #include "core/camera.h"
 #include "core/error.h"
 #include "core/json_reader.h"
+#include "core/progress.h"
+#include "core/train_views.h"
 #include "reconstruction/gaussians.h"
 #include "reconstruction/loss.h"
 #include "reconstruction/rasterizer.h"
@@ -96,13 +98,7 @@ const char* to_string(TrainOptions::Schedule s);
 const char* to_string(TrainOptions::RandomInit r);
 const char* to_string(TrainOptions::Robust r);
 
-// One training image: camera, sRGB pixels in [0, 1] (H x W x 3) and an optional mask (H x W,
-// nonzero = masked out; empty = all valid).
-struct TrainView {
-  Camera camera;
-  std::vector<float> rgb;
-  std::vector<uint8_t> invalid;
-};
+using weathergs::TrainView;  // core/train_views.h
 
 // Radius of the camera centres around their mean, times 1.1 (getNerfppNorm): the "cameras extent".
 double scene_extent(const std::vector<Camera>& cameras);
@@ -179,7 +175,6 @@ class Trainer {
   int densify_capped_ = 0;
 };
 
-// Peak resident set size of this process in MiB (getrusage).
-double peak_rss_mb();
+using weathergs::peak_rss_mb;  // core/progress.h
 
 }  // namespace weathergs::recon

@@ -1,0 +1,200 @@
+#include "nerf/run.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "core/colmap_model.h"
+#include "core/dataset_layout.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/progress.h"
+
+namespace weathergs::nerf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kRunVersion = 1;
+constexpr const char* kFieldFile = "field.bin";
+constexpr const char* kRunJson = "run.json";
+constexpr double kMinNearM = 0.05;      // the generator's own near clip (datagen: Cycles clip_start)
+constexpr double kDefaultNearM = 1.0;   // without SfM points
+
+Json nullable(const std::string& s) { return s.empty() ? Json(nullptr) : Json(s); }
+
+struct RunInfo {
+  std::string dataset;
+  bool complete = false;
+  int iterations = 0;
+  double train_seconds = 0, peak_rss_mb = 0;
+};
+
+RunInfo read_run_info(const std::string& run_dir) {
+  const std::string path = (fs::path(run_dir) / kRunJson).string();
+  if (!fs::exists(path)) throw InputError(path, "missing: not a radiance-field run folder");
+  const Json j = read_json_file(path);
+  if (j.value("format", "") != kNerfRunFormat) throw InputError(path, std::string("expected format ") + kNerfRunFormat);
+  if (j.value("version", 0) != kRunVersion) throw InputError(path, "expected version " + std::to_string(kRunVersion));
+  RunInfo ri;
+  ri.dataset = j.value("dataset", "");
+  ri.complete = j.value("complete", false);
+  ri.iterations = j.value("iterations", 0);
+  ri.train_seconds = j.value("train_seconds", 0.0);
+  ri.peak_rss_mb = j.value("peak_rss_mb", 0.0);
+  return ri;
+}
+
+// Renders `names` of the dataset into an atomic folder with info.json.
+NerfRenderResult render_views(const RadianceField& field, const Dataset& ds, const std::vector<std::string>& names,
+                              const MarchSettings& march, const std::string& out, const Json& info_base) {
+  AtomicDirectory dir(out);
+  NerfRenderResult r;
+  for (const std::string& name : names) {
+    const Camera& cam = ds.camera(name);
+    const auto t0 = std::chrono::steady_clock::now();
+    Image img(cam.width, cam.height, 3);
+    img.data = field.render(cam, march);
+    r.render_seconds += seconds_since(t0);
+    write_image((fs::path(dir.path()) / (name + layout::kImageExt)).string(), img);
+    ++r.views;
+  }
+  Json info = info_base;
+  info["render_seconds"] = r.render_seconds;
+  write_file_atomic((fs::path(dir.path()) / "info.json").string(), info.dump(2) + "\n");
+  dir.commit();
+  return r;
+}
+
+}  // namespace
+
+void NerfRunOptions::validate() const {
+  if (dataset.empty()) throw InputError("nerf run options", "dataset is empty: the dataset folder is required");
+  if (out.empty()) throw InputError("nerf run options", "out is empty: the run folder is required");
+  inputs.validate("nerf run options: inputs");
+  for (int it : snapshot_at)
+    if (it < 1) throw InputError("nerf run options", "snapshot_at holds " + std::to_string(it) + ": must be >= 1");
+  nerf.validate("nerf run options: nerf");
+}
+
+void NerfRenderOptions::validate() const {
+  if (model.empty()) throw InputError("nerf render options", "model is empty: the run folder is required");
+  if (out.empty()) throw InputError("nerf render options", "out is empty: the renders folder is required");
+}
+
+std::string nerf_snapshot_dir(const std::string& run_dir, int iteration) {
+  char name[32];
+  std::snprintf(name, sizeof name, "iter_%06d", iteration);
+  return (fs::path(run_dir) / "snapshots" / name).string();
+}
+
+NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallback& on_iteration) {
+  o.validate();
+  const Dataset ds = read_dataset(o.dataset);
+  const fs::path run(o.out);
+  if (fs::exists(run / kRunJson)) {
+    if (!o.force) throw InputError(o.out, "already holds a radiance-field run: pass force (--force) to start over");
+    for (const char* f : {kRunJson, kFieldFile, "snapshots"}) fs::remove_all(run / f);
+  } else if (fs::exists(run) && !fs::is_empty(run)) {
+    throw InputError(o.out, "exists and is not a radiance-field run folder: refusing to write into it");
+  }
+  fs::create_directories(run);
+  const auto t_start = std::chrono::steady_clock::now();
+  std::vector<TrainView> views = load_train_views(ds, o.inputs);
+
+  // The frame covers every camera of the dataset (test views are rendered from it too); the near
+  // plane comes from the SfM points the 3DGS methods would start from.
+  NerfRunResult result;
+  double near = o.nerf.near_m;
+  result.near_source = "near_m option";
+  if (near <= 0) {
+    const std::string pts_dir = o.inputs.points_dir.empty() ? ds.file(layout::kSparseModelDir) : o.inputs.points_dir;
+    const fs::path pts_file = fs::path(pts_dir) / "points3D.txt";
+    std::vector<Eigen::Vector3d> pts;
+    if (fs::exists(pts_file))
+      for (const ColmapPoint3D& p : read_colmap_points3d(pts_file.string())) pts.push_back(p.xyz);
+    near = near_from_points(ds.cameras, pts, kMinNearM, kDefaultNearM);
+    result.near_source = pts.size() >= 10 ? "sfm points: " + std::to_string(pts.size()) : "default (no SfM points)";
+  }
+  result.near_m = near;
+  const FrustumFrame frame = forward_facing_frame(ds.cameras, near);
+  NerfTrainer trainer(std::move(views), frame, o.nerf);
+
+  double excluded = 0;  // seconds spent on snapshots
+  auto info_json = [&](bool complete, double seconds) {
+    const GridDims d = trainer.field().dims();
+    return Json{{"format", kNerfRunFormat},
+                {"version", kRunVersion},
+                {"complete", complete},
+                {"dataset", fs::absolute(o.dataset).string()},
+                {"images", to_string(o.inputs.images)},
+                {"images_dir", nullable(o.inputs.images_dir)},
+                {"masks", to_string(o.inputs.masks)},
+                {"masks_dir", nullable(o.inputs.masks_dir)},
+                {"points_dir", nullable(o.inputs.points_dir)},
+                {"iterations", trainer.iteration()},
+                {"train_seconds", seconds},
+                {"peak_rss_mb", peak_rss_mb()},
+                {"lattice", {d.nu, d.nv, d.nw}},
+                {"occupied_cells", trainer.field().occupied_cells()},
+                {"near_m", near},
+                {"near_source", result.near_source},
+                {"frame", frame.to_json()},
+                {"options", o.nerf.to_json()}};
+  };
+  write_file_atomic((run / kRunJson).string(), info_json(false, 0).dump(2) + "\n");
+  std::vector<int> snaps;
+  for (int it : o.snapshot_at)
+    if (it < o.nerf.iterations) snaps.push_back(it);
+  while (trainer.iteration() < o.nerf.iterations) {
+    const NerfIterationStats st = trainer.step();
+    if (on_iteration) on_iteration(st);
+    if (std::find(snaps.begin(), snaps.end(), st.iteration) != snaps.end()) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const double train_s = seconds_since(t_start) - excluded;
+      render_views(trainer.field(), ds, ds.split(o.snapshot_split), o.nerf.march,
+                   nerf_snapshot_dir(o.out, st.iteration),
+                   Json{{"method", o.method},
+                        {"train_seconds", train_s},
+                        {"peak_rss_mb", peak_rss_mb()},
+                        {"iterations", st.iteration},
+                        {"lattice_points", st.lattice_points}});
+      excluded += seconds_since(t0);
+    }
+  }
+  result.train_seconds = seconds_since(t_start) - excluded;
+  trainer.field().save((run / kFieldFile).string());
+  result.iterations = trainer.iteration();
+  result.peak_rss_mb = peak_rss_mb();
+  result.lattice_points = trainer.field().dims().points();
+  result.occupied_cells = trainer.field().occupied_cells();
+  write_file_atomic((run / kRunJson).string(), info_json(true, result.train_seconds).dump(2) + "\n");
+  return result;
+}
+
+NerfRenderResult render_nerf_run(const NerfRenderOptions& o) {
+  o.validate();
+  const RunInfo ri = read_run_info(o.model);
+  if (!ri.complete) throw InputError((fs::path(o.model) / kRunJson).string(), "the run is not complete: train it first");
+  const RadianceField field = RadianceField::load((fs::path(o.model) / kFieldFile).string());
+  const Dataset ds = read_dataset(o.dataset.empty() ? ri.dataset : o.dataset);
+  const Json run = read_json_file((fs::path(o.model) / kRunJson).string());
+  MarchSettings march;
+  const Json& opt = run.at("options");
+  march.samples_per_cell = opt.value("samples_per_cell", march.samples_per_cell);
+  march.min_weight = opt.value("min_weight", march.min_weight);
+  march.min_transmittance = opt.value("min_transmittance", march.min_transmittance);
+  std::vector<std::string> all_views;
+  for (const Camera& c : ds.cameras) all_views.push_back(c.name);
+  const std::vector<std::string>& names = o.split == "all" ? all_views : ds.split(o.split);
+  return render_views(field, ds, names, march, o.out,
+                      Json{{"method", o.method},
+                           {"train_seconds", ri.train_seconds},
+                           {"peak_rss_mb", std::max(ri.peak_rss_mb, peak_rss_mb())},
+                           {"iterations", ri.iterations},
+                           {"lattice_points", field.dims().points()}});
+}
+
+}  // namespace weathergs::nerf

@@ -1,0 +1,67 @@
+// Whole radiance-field runs on a dataset, with the same contract as the 3DGS runs
+// (reconstruction/run.h), so the study and the leaderboard treat every method alike.
+//
+// A run folder holds:
+//   run.json     {"format": "weathergs-nerf-run", "version": 1, "complete": bool, "dataset", the
+//                 inputs (images, images_dir, masks, masks_dir, points_dir), "iterations",
+//                 "train_seconds", "peak_rss_mb", "lattice": [nu, nv, nw], "occupied_cells",
+//                 "near_m", "options": {...}}
+//   field.bin    the trained field (field.h)
+//   snapshots/iter_NNNNNN/  renders of `snapshot_split` at the `snapshot_at` iterations with their
+//                info.json (a field is ~100 MB, so snapshots are kept as renders, not as models);
+//                rendering them is not counted in train_seconds
+// There is no checkpoint: an incomplete run (killed part way) starts over. Every file is atomic.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/train_views.h"
+#include "nerf/trainer.h"
+
+namespace weathergs::nerf {
+
+inline constexpr const char* kNerfRunFormat = "weathergs-nerf-run";
+
+struct NerfRunOptions {
+  std::string dataset;
+  TrainInputs inputs;
+  std::string out;
+  bool force = false;  // replace a run the folder already holds
+  std::vector<int> snapshot_at;
+  std::string snapshot_split = "test";
+  std::string method = "nerf";  // written into the snapshots' info.json
+  NerfOptions nerf;
+  void validate() const;  // InputError naming the field
+};
+
+struct NerfRunResult {
+  int iterations = 0;
+  double train_seconds = 0, peak_rss_mb = 0, near_m = 0;
+  int64_t lattice_points = 0, occupied_cells = 0;
+  std::string near_source;  // "sfm points: N" or "default"
+};
+
+using NerfIterationCallback = std::function<void(const NerfIterationStats&)>;
+NerfRunResult train_nerf_run(const NerfRunOptions& options, const NerfIterationCallback& on_iteration = {});
+
+// The folder of the renders kept at one snapshot iteration.
+std::string nerf_snapshot_dir(const std::string& run_dir, int iteration);
+
+struct NerfRenderOptions {
+  std::string model;  // run folder (complete)
+  std::string dataset;  // empty: the dataset recorded in run.json
+  std::string split = "test";
+  std::string out;  // renders folder (replaced atomically): <view>.png + info.json
+  std::string method = "nerf";
+  void validate() const;
+};
+
+struct NerfRenderResult {
+  int views = 0;
+  double render_seconds = 0;
+};
+NerfRenderResult render_nerf_run(const NerfRenderOptions& options);
+
+}  // namespace weathergs::nerf
