@@ -30,13 +30,18 @@ int run(ReconstructArgs& a) {
                                                              : recon::MaskNormalization::kValid;
   if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
   if (a.led_threshold > 0) o.led_mask.threshold = a.led_threshold;
-  ProgressBar bar("train", o.iterations);
+  const bool nerf = study::recipe(o.method).backend == study::Backend::kNerf;
+  const int total = nerf ? o.nerf.iterations : o.iterations;
+  ProgressBar bar("train", total);
   int reported = 0;
   auto on_iteration = [&](const recon::IterationStats& st) {
     if (reported++ == 0) bar.tick(st.iteration - 1);  // a resumed run starts part way
-    if (st.iteration % 10 == 0 || st.iteration == o.iterations) {
+    if (st.iteration % 10 == 0 || st.iteration == total) {
       char s[120];
-      std::snprintf(s, sizeof s, "it %d loss %.4f n %lld", st.iteration, st.loss, static_cast<long long>(st.num_gaussians));
+      if (nerf)
+        std::snprintf(s, sizeof s, "it %d loss %.5f psnr %.2f", st.iteration, st.loss, st.psnr);
+      else
+        std::snprintf(s, sizeof s, "it %d loss %.4f n %lld", st.iteration, st.loss, static_cast<long long>(st.num_gaussians));
       bar.set_status(s);
     }
     bar.tick();
@@ -68,7 +73,11 @@ Command make(CLI::App& root) {
   sub->add_option("--data", a->options.dataset, "Dataset folder")->required();
   sub->add_option("--method", a->method, "Method: " + methods)->capture_default_str();
   sub->add_option("--out", a->options.out, "Run folder")->required();
-  sub->add_option("--iterations", a->options.iterations, "Training iterations")->capture_default_str();
+  sub->add_option("--iterations", a->options.iterations, "Training iterations (3DGS methods)")->capture_default_str();
+  sub->add_option("--nerf-iterations", a->options.nerf.iterations,
+                  "Training iterations of the radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle; "
+                  "batches of " + std::to_string(a->options.nerf.batch_rays) + " rays; docs/nerf.md)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
   sub->add_option("--seed", a->options.seed, "Random seed")->capture_default_str();
   sub->add_option("--mask-normalization", a->mask_normalization,
                   "Masked loss (gt-masks, weathergs, weathergs-no-aef, robust-3dgs): valid (means over the valid "

@@ -124,7 +124,7 @@ double near_from_points(const std::vector<Camera>& cameras, const std::vector<Ei
   if (z.size() < 10) return fallback_m;
   const size_t k = z.size() / 100;
   std::nth_element(z.begin(), z.begin() + k, z.end());
-  return std::max(min_near_m, 0.8 * z[k]);
+  return std::max(min_near_m, 0.5 * z[k]);
 }
 
 }  // namespace weathergs::nerf

@@ -33,8 +33,10 @@ struct FrustumFrame {
 // plane), naming the camera. `cameras` must not be empty.
 FrustumFrame forward_facing_frame(const std::vector<Camera>& cameras, double near_m);
 
-// The near plane from SfM points (world): 0.8 x their 1st-percentile depth in the reference frame of
-// `cameras`, at least `min_near_m`. Returns `fallback_m` when there are fewer than 10 points in front.
+// The near plane from SfM points (world): half their 1st-percentile depth in the reference frame of
+// `cameras` (cameras sit up to ~1 m before or behind the reference plane on our captures, and SfM
+// rarely has points on the nearest ground), at least `min_near_m`. Returns `fallback_m` when there
+// are fewer than 10 points in front.
 double near_from_points(const std::vector<Camera>& cameras, const std::vector<Eigen::Vector3d>& points,
                         double min_near_m, double fallback_m);
 

@@ -50,6 +50,7 @@ RunInfo read_run_info(const std::string& run_dir) {
 // Renders `names` of the dataset into an atomic folder with info.json.
 NerfRenderResult render_views(const RadianceField& field, const Dataset& ds, const std::vector<std::string>& names,
                               const MarchSettings& march, const std::string& out, const Json& info_base) {
+  fs::create_directories(fs::path(out).parent_path());
   AtomicDirectory dir(out);
   NerfRenderResult r;
   for (const std::string& name : names) {

@@ -20,7 +20,7 @@
 namespace weathergs::nerf {
 
 struct NerfOptions {
-  int iterations = 6000;
+  int iterations = 3000;  // ~15 min on 2 cores at the quick profile (docs/nerf.md)
   int batch_rays = 4096;
   uint64_t seed = 0;
   // The final lattice: one point per `pixels_per_cell` pixels of the mean focal length across the

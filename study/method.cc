@@ -15,6 +15,10 @@ const char* to_string(Method m) {
     case Method::kWeatherGSNoLed: return "weathergs-no-led";
     case Method::kRobust3dgs: return "robust-3dgs";
     case Method::kDesplat: return "desplat";
+    case Method::kNerf: return "nerf";
+    case Method::kDerainNerf: return "derainnerf";
+    case Method::kWeatherGSNerf: return "weathergs-nerf";
+    case Method::kNerfOracle: return "nerf-oracle";
   }
   WGS_CHECK(false);
   return "";
@@ -23,7 +27,8 @@ const char* to_string(Method m) {
 std::vector<Method> all_methods() {
   return {Method::k3dgs,     Method::kOracle,         Method::kGtMasks,       Method::kAefTophat,
           Method::kWeatherGS, Method::kWeatherGSNoAef, Method::kWeatherGSNoLed, Method::kRobust3dgs,
-          Method::kDesplat};
+          Method::kDesplat,  Method::kNerf,           Method::kDerainNerf,    Method::kWeatherGSNerf,
+          Method::kNerfOracle};
 }
 
 Method parse_method(const std::string& name, const std::string& where) {
@@ -52,6 +57,14 @@ std::string method_description(Method m) {
     case Method::kDesplat:
       return "3DGS with DeSplat-style distractor Gaussians: " + std::to_string(kDesplatDistractorsPerView) +
              " per training view in front of its camera, rendered only for that view, dropped at test time";
+    case Method::kNerf: return "grid radiance field (DVGO/Plenoxels family, docs/nerf.md) on the weathered images";
+    case Method::kDerainNerf:
+      return "DerainNeRF: LED attention per view (not averaged) as occlusion masks excluded from the radiance "
+             "field's MSE";
+    case Method::kWeatherGSNerf:
+      return "Ours-NeRF: AEF (classical top-hat) on every view, LED averaged over the training views, radiance "
+             "field with the LED mask excluded";
+    case Method::kNerfOracle: return "grid radiance field on the clean images (its upper bound)";
   }
   WGS_CHECK(false);
   return "";
@@ -72,6 +85,20 @@ Recipe recipe(Method m) {
     case Method::kWeatherGSNoLed: r.particle_filter = true; break;
     case Method::kRobust3dgs: r.robust = true; break;
     case Method::kDesplat: r.distractors_per_view = kDesplatDistractorsPerView; break;
+    case Method::kNerf: r.backend = Backend::kNerf; break;
+    case Method::kDerainNerf:
+      r.backend = Backend::kNerf;
+      r.lens_detector = r.led_per_view = true;
+      break;
+    case Method::kWeatherGSNerf:
+      r.backend = Backend::kNerf;
+      r.particle_filter = r.lens_detector = true;
+      break;
+    case Method::kNerfOracle:
+      r.backend = Backend::kNerf;
+      r.images = recon::TrainImages::kClean;
+      r.clean_points = true;
+      break;
   }
   return r;
 }

@@ -1,7 +1,8 @@
 // The reconstruction methods of the study, one recipe each (docs/study.md). A recipe says what a
 // method trains on: which images, which loss masks, which SfM points. Methods that need the
 // restoration part: the Atmospheric Effect Filter (today the classical top-hat filter: no learned AEF
-// exists yet) and the learned Lens Effect Detector.
+// exists yet) and the learned Lens Effect Detector. Methods run on one of two backends: 3DGS
+// (reconstruction/) or the grid radiance field (nerf/).
 #pragma once
 
 #include <string>
@@ -23,6 +24,11 @@ enum class Method {
   kWeatherGSNoLed,  // ablation: AEF only (while the AEF is the classical one, the same recipe as aef-tophat)
   kRobust3dgs,      // 3DGS with the RobustFilter per-pixel distractor mask (reconstruction/robust_mask.h)
   kDesplat,         // 3DGS with per-view distractor Gaussians, dropped at test time (reconstruction/distractors.h)
+  // The radiance-field backend (nerf/, docs/nerf.md): the paper's NeRF-family rows.
+  kNerf,           // the grid radiance field on the weathered images (the paper's NeRF row)
+  kDerainNerf,     // DerainNeRF: per-view LED masks (not averaged) excluded from the radiance field's MSE
+  kWeatherGSNerf,  // "Ours-NeRF" (Table IV): the WeatherGS preprocessing (AEF -> LED averaged) on the field
+  kNerfOracle,     // the radiance field on the clean images: its upper bound
 };
 const char* to_string(Method m);
 std::vector<Method> all_methods();
@@ -35,13 +41,18 @@ std::string method_description(Method m);
 // before any benchmark run, not tuned on it.
 constexpr int kDesplatDistractorsPerView = 1000;
 
+// Which reconstruction a method trains.
+enum class Backend { k3dgs, kNerf };
+
 struct Recipe {
+  Backend backend = Backend::k3dgs;
   recon::TrainImages images = recon::TrainImages::kImages;
   recon::TrainMasks masks = recon::TrainMasks::kNone;
   bool clean_points = false;  // initialize from sparse_clean/0 (clean/ triangulated) instead of sparse/0
   bool particle_filter = false;  // train on the classical AEF's restored images (RUN/filtered/)
   bool lens_detector = false;    // exclude the LED's mask (RUN/detected/) from the loss; the LED sees the
                                  // filtered images when particle_filter, else the raw ones
+  bool led_per_view = false;     // the LED's per-view maps instead of the mean over the training views
   bool robust = false;           // the trainer's RobustFilter mask (TrainOptions::Robust::kRobustFilter)
   int distractors_per_view = 0;  // TrainOptions::distractors_per_view (desplat)
 };

@@ -46,6 +46,7 @@ void ReconstructOptions::validate() const {
     if (it < 1) throw InputError("reconstruct options", "eval_at holds " + std::to_string(it) + ": iterations must be >= 1");
   colmap.validate();
   led_mask.validate();
+  nerf.validate("reconstruct options: nerf");
   if (recipe(method).lens_detector && led_weights.empty())
     throw InputError("reconstruct options", std::string("led_weights is empty: method ") + to_string(method) +
                                                 " needs the Lens Effect Detector's weights (--led-weights)");
@@ -118,57 +119,115 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     d.weights = o.led_weights;
     d.mask = o.led_mask;
     if (r.particle_filter) d.images_dir = (run / kFilteredDir).string();
+    if (r.led_per_view) d.averaging = restoration::LedAveraging::kPerView;
     restoration::detect_dataset(o.dataset, (run / kDetectedDir).string(), d);
   }
 
-  // 3. Training (resumed when an earlier run of the same options stopped part way).
-  recon::TrainRunOptions t;
-  t.dataset = o.dataset;
-  t.inputs.images = r.images;
-  t.inputs.masks = r.masks;
-  if (r.particle_filter) t.inputs.images_dir = (run / kFilteredDir).string();
-  if (r.lens_detector) t.inputs.masks_dir = (run / kDetectedDir).string();
-  t.inputs.points_dir = points_dir;
-  t.out = (run / kModelDir).string();
-  t.checkpoint_every = o.checkpoint_every;
-  for (int it : o.eval_at)
-    if (it < o.iterations) t.snapshot_at.push_back(it);
-  t.train.iterations = o.iterations;
-  t.train.seed = o.seed;
-  t.train.random_init_count = o.random_init_count;
-  t.train.mask_normalization = o.mask_normalization;
-  if (r.robust) t.train.robust = recon::TrainOptions::Robust::kRobustFilter;
-  t.train.distractors_per_view = r.distractors_per_view;
-  t.train.distractor_opacity_weight = o.distractor_opacity_weight;
-  const fs::path run_json = run / kModelDir / "run.json";
-  bool trained = false;
-  if (fs::exists(run_json)) {
-    const Json j = read_json_file(run_json.string());
-    trained = j.value("complete", false) && j.value("iterations", 0) == o.iterations;
-    t.resume = !trained && fs::exists(run / kModelDir / "checkpoint.bin");
-    t.force = !trained && !t.resume;
-  }
-  if (!trained) {
-    stage(std::string(t.resume ? "resuming" : "training") + " " + to_string(o.method) + ": " + method_description(o.method));
-    const recon::TrainRunResult tr = recon::train_run(t, on_iteration);
-    out.resumed = t.resume;
-    out.peak_rss_mb = tr.peak_rss_mb;
+  // 3. Training (resumed when an earlier run of the same options stopped part way), 4. test renders.
+  TrainInputs inputs;
+  inputs.images = r.images;
+  inputs.masks = r.masks;
+  if (r.particle_filter) inputs.images_dir = (run / kFilteredDir).string();
+  if (r.lens_detector) inputs.masks_dir = (run / kDetectedDir).string();
+  inputs.points_dir = points_dir;
+  const std::string model_dir = (run / kModelDir).string(), renders_dir = (run / kRendersDir).string();
+  fs::create_directories(fs::path(renders_dir).parent_path());
+  std::vector<int> snapshots;  // iterations of the curve's snapshots, in the backend's own units
+  double render_seconds = 0;
+  int render_views = 0, final_iteration = 0;
+  if (r.backend == Backend::kNerf) {
+    nerf::NerfRunOptions t;
+    t.dataset = o.dataset;
+    t.inputs = inputs;
+    t.out = model_dir;
+    t.method = to_string(o.method);
+    t.nerf = o.nerf;
+    t.nerf.seed = o.seed;
+    for (int it : o.eval_at)
+      if (it < o.iterations) {
+        const int s = std::max(1, int(std::lround(double(it) * t.nerf.iterations / o.iterations)));
+        if (s < t.nerf.iterations) snapshots.push_back(s);
+      }
+    t.snapshot_at = snapshots;
+    final_iteration = t.nerf.iterations;
+    const fs::path run_json = fs::path(model_dir) / "run.json";
+    bool trained = false;
+    if (fs::exists(run_json)) {
+      const Json j = read_json_file(run_json.string());
+      trained = j.value("format", "") == nerf::kNerfRunFormat && j.value("complete", false) &&
+                j.value("iterations", 0) == t.nerf.iterations;
+    }
+    t.force = !trained;  // no checkpoints: an incomplete radiance-field run starts over
+    if (!trained) {
+      stage("training " + std::string(to_string(o.method)) + ": " + method_description(o.method));
+      const nerf::NerfRunResult tr = train_nerf_run(t, [&](const nerf::NerfIterationStats& st) {
+        if (!on_iteration) return;
+        recon::IterationStats is;
+        is.iteration = st.iteration;
+        is.loss = st.loss;
+        is.psnr = st.psnr;
+        on_iteration(is);
+      });
+      out.peak_rss_mb = tr.peak_rss_mb;
+    }
+    stage("rendering the test views");
+    nerf::NerfRenderOptions rr;
+    rr.model = model_dir;
+    rr.dataset = o.dataset;
+    rr.method = to_string(o.method);
+    rr.out = renders_dir;
+    const nerf::NerfRenderResult rres = nerf::render_nerf_run(rr);
+    render_seconds = rres.render_seconds;
+    render_views = rres.views;
+  } else {
+    recon::TrainRunOptions t;
+    t.dataset = o.dataset;
+    t.inputs = inputs;
+    t.out = model_dir;
+    t.checkpoint_every = o.checkpoint_every;
+    for (int it : o.eval_at)
+      if (it < o.iterations) t.snapshot_at.push_back(it);
+    snapshots = t.snapshot_at;
+    final_iteration = o.iterations;
+    t.train.iterations = o.iterations;
+    t.train.seed = o.seed;
+    t.train.random_init_count = o.random_init_count;
+    t.train.mask_normalization = o.mask_normalization;
+    if (r.robust) t.train.robust = recon::TrainOptions::Robust::kRobustFilter;
+    t.train.distractors_per_view = r.distractors_per_view;
+    t.train.distractor_opacity_weight = o.distractor_opacity_weight;
+    const fs::path run_json = run / kModelDir / "run.json";
+    bool trained = false;
+    if (fs::exists(run_json)) {
+      const Json j = read_json_file(run_json.string());
+      trained = j.value("complete", false) && j.value("iterations", 0) == o.iterations;
+      t.resume = !trained && fs::exists(run / kModelDir / "checkpoint.bin");
+      t.force = !trained && !t.resume;
+    }
+    if (!trained) {
+      stage(std::string(t.resume ? "resuming" : "training") + " " + to_string(o.method) + ": " +
+            method_description(o.method));
+      const recon::TrainRunResult tr = recon::train_run(t, on_iteration);
+      out.resumed = t.resume;
+      out.peak_rss_mb = tr.peak_rss_mb;
+    }
+    stage("rendering the test views");
+    recon::RenderRunOptions rr;
+    rr.model = t.out;
+    rr.dataset = o.dataset;
+    rr.split = "test";
+    rr.method = to_string(o.method);
+    rr.out = renders_dir;
+    const recon::RenderRunResult rres = recon::render_run(rr);
+    render_seconds = rres.render_seconds;
+    render_views = rres.views;
   }
 
-  // 4. Test renders, then 5. the evaluation; results.json last.
-  stage("rendering the test views");
-  recon::RenderRunOptions rr;
-  rr.model = t.out;
-  rr.dataset = o.dataset;
-  rr.split = "test";
-  rr.method = to_string(o.method);
-  rr.out = (run / kRendersDir).string();
-  fs::create_directories(fs::path(rr.out).parent_path());
-  const recon::RenderRunResult rres = recon::render_run(rr);
+  // 5. The evaluation; results.json last.
   stage("evaluating against the clean ground truth");
   evaluator::EvaluateOptions e;
   e.gt_dataset = o.dataset;
-  e.renders_dir = rr.out;
+  e.renders_dir = renders_dir;
   e.method = to_string(o.method);
   e.scoring = o.scoring;
   out.results = evaluator::evaluate(e);
@@ -191,21 +250,29 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     p["num_gaussians"] = res.method_info.value("num_gaussians", 0);
     points.push_back(p);
   };
-  std::vector<int> its = t.snapshot_at;
+  std::vector<int> its = snapshots;
   std::sort(its.begin(), its.end());
   its.erase(std::unique(its.begin(), its.end()), its.end());
   for (int it : its) {
     stage("scoring the snapshot at iteration " + std::to_string(it));
-    recon::RenderRunOptions sr = rr;
+    evaluator::EvaluateOptions se = e;
+    if (r.backend == Backend::kNerf) {  // the run kept the renders themselves
+      se.renders_dir = nerf::nerf_snapshot_dir(model_dir, it);
+      add_point(evaluator::evaluate(se), it);
+      continue;
+    }
+    recon::RenderRunOptions sr;
+    sr.model = model_dir;
+    sr.dataset = o.dataset;
+    sr.method = to_string(o.method);
     sr.snapshot = it;
     sr.out = (run / kSnapshotRendersDir).string();
     recon::render_run(sr);
-    evaluator::EvaluateOptions se = e;
     se.renders_dir = sr.out;
     add_point(evaluator::evaluate(se), it);
     fs::remove_all(sr.out);
   }
-  add_point(out.results, o.iterations);
+  add_point(out.results, final_iteration);
   const Json curve{{"format", "weathergs-curve"},   {"version", 1},
                    {"method", to_string(o.method)}, {"dataset", out.results.dataset},
                    {"scene", out.results.scene},    {"weather", out.results.weather},
@@ -214,7 +281,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   evaluator::write_results(results_path.string(), out.results);
   out.train_seconds = out.results.method_info.value("train_seconds", 0.0);
   out.peak_rss_mb = out.results.method_info.value("peak_rss_mb", out.peak_rss_mb);
-  out.render_seconds_per_view = rres.views > 0 ? rres.render_seconds / rres.views : 0;
+  out.render_seconds_per_view = render_views > 0 ? render_seconds / render_views : 0;
   return out;
 }
 

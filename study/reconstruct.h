@@ -6,7 +6,8 @@
 //   detected/           the LED's loss masks of every view (detect.json)
 //   sparse/0/           COLMAP points triangulated here when the dataset has none (the dataset itself
 //                       is never modified); logs/colmap/ its logs
-//   model/              the training run (reconstruction/run.h: run.json, point_cloud.ply, checkpoint)
+//   model/              the training run (reconstruction/run.h: run.json, point_cloud.ply, checkpoint;
+//                       radiance-field methods: nerf/run.h, run.json, field.bin, snapshots/ renders)
 //   renders/test/       <view>.png and info.json (method, train/render seconds, peak memory, ...)
 //   curve.json          accuracy against training time: the test metrics at the `eval_at` iterations
 //                       (model/snapshots/) and at the end, with the training seconds to get there
@@ -20,6 +21,7 @@
 
 #include "datagen/colmap.h"
 #include "evaluator/evaluate.h"
+#include "nerf/run.h"
 #include "reconstruction/run.h"
 #include "restoration/detect_dataset.h"
 #include "restoration/particle_filter.h"
@@ -37,7 +39,7 @@ struct ReconstructOptions {
   std::string dataset;
   std::string out;
   Method method = Method::k3dgs;
-  int iterations = 30000;
+  int iterations = 30000;  // 3DGS iterations (radiance-field methods: nerf.iterations)
   uint64_t seed = 0;
   int random_init_count = 50000;  // Gaussians of the random initialization (when no SfM points)
   // The masked loss's normalisation (reconstruction/loss.h); matters for methods with loss masks.
@@ -46,7 +48,8 @@ struct ReconstructOptions {
   double distractor_opacity_weight = recon::TrainOptions{}.distractor_opacity_weight;
   int checkpoint_every = 1000;
   // Iterations at which the test views are also scored (curve.json); those >= iterations are ignored
-  // (the final model is always a point of the curve). Each must be >= 1.
+  // (the final model is always a point of the curve). Each must be >= 1. Radiance-field methods score
+  // at the same fractions of their own run: it * nerf.iterations / iterations, rounded.
   std::vector<int> eval_at;
   bool force = false;
   PointsPolicy points = PointsPolicy::kAuto;
@@ -55,6 +58,8 @@ struct ReconstructOptions {
   restoration::ParticleFilterOptions particle_filter;  // aef-tophat, weathergs, weathergs-no-led
   std::string led_weights;  // weathergs, weathergs-no-aef: the LED weights stem (required for them)
   restoration::LedMaskOptions led_mask;
+  // Radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle); its seed is `seed`.
+  nerf::NerfOptions nerf;
 
   void validate() const;  // InputError naming the field
 };
