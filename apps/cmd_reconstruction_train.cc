@@ -44,6 +44,7 @@ int run_train(TrainArgs& args) {
     if (!given("--distractor-opacity-weight"))
       o.train.distractor_opacity_weight = stored.train.distractor_opacity_weight;
     if (!given("--mask-normalization")) o.train.mask_normalization = stored.train.mask_normalization;
+    if (!given("--in-the-wild")) o.train.in_the_wild = stored.train.in_the_wild;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
@@ -106,6 +107,9 @@ Command make_train(CLI::App& root) {
                   "Opacity penalty of the distractor Gaussians: the loss gains this x the image fraction their "
                   "opacity covers (docs/reconstruction.md)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);
+  sub->add_flag("--in-the-wild", o.train.in_the_wild,
+                "gs-w-lite: per-view affine appearance and a learned per-view visibility map with GS-W's (1 - M)^2 "
+                "regulariser (docs/reconstruction.md, \"In the wild\")");
   sub->add_option("--random-init", args->random_init,
                   "Random initialization when the dataset has no COLMAP points: photo (each point at the depth "
                   "where neighbouring views agree) or frustum (uniform in inverse depth, random colours)")

@@ -77,6 +77,9 @@ void TrainOptions::validate(const std::string& where) const {
       fail("background", std::to_string(background[c]), "each channel must be in [0, 1]");
   if (distractors_per_view < 0 || distractors_per_view > 100000)
     fail("distractors_per_view", std::to_string(distractors_per_view), "must be in [0, 100000]");
+  if (in_the_wild_from < 0) fail("in_the_wild_from", std::to_string(in_the_wild_from), "must be >= 0");
+  if (!(visibility_weight >= 0 && std::isfinite(visibility_weight)))
+    fail("visibility_weight", std::to_string(visibility_weight), "must be a finite number >= 0");
   if (!(distractor_opacity_weight >= 0 && std::isfinite(distractor_opacity_weight)))
     fail("distractor_opacity_weight", std::to_string(distractor_opacity_weight), "must be a finite number >= 0");
   if (random_init_count < 1) fail("random_init_count", std::to_string(random_init_count), "must be >= 1");
@@ -117,6 +120,9 @@ Json TrainOptions::to_json() const {
               {"mask_normalization", to_string(mask_normalization)},
               {"distractors_per_view", distractors_per_view},
               {"distractor_opacity_weight", distractor_opacity_weight},
+              {"in_the_wild", in_the_wild},
+              {"in_the_wild_from", in_the_wild_from},
+              {"visibility_weight", visibility_weight},
               {"random_init_count", random_init_count},
               {"random_init_near_m", random_init_near_m},
               {"random_init_far_m", random_init_far_m}};
@@ -208,6 +214,9 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.random_init_count = r.get_or("random_init_count", o.random_init_count);
   o.distractors_per_view = r.get_or("distractors_per_view", o.distractors_per_view);
   o.distractor_opacity_weight = r.get_or("distractor_opacity_weight", o.distractor_opacity_weight);
+  o.in_the_wild = r.get_or("in_the_wild", o.in_the_wild);
+  o.in_the_wild_from = r.get_or("in_the_wild_from", o.in_the_wild_from);
+  o.visibility_weight = r.get_or("visibility_weight", o.visibility_weight);
   o.robust = r.get_enum_or("robust", o.robust, {Robust::kNone, Robust::kRobustFilter});
   o.mask_normalization = r.get_enum_or("mask_normalization", o.mask_normalization,
                                        {MaskNormalization::kValid, MaskNormalization::kReference});
@@ -252,6 +261,13 @@ Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const
     for (const TrainView& v : views_) cameras.push_back(v.camera);
     add_distractors(cameras, options_.distractors_per_view, options_.seed, DistractorPlacement{}, &g_, &owner_);
     num_distractors_ = int64_t(cameras.size()) * options_.distractors_per_view;
+  }
+  if (options_.in_the_wild) {
+    InTheWildOptions w;
+    w.from = options_.in_the_wild_from;
+    w.visibility_weight = options_.visibility_weight;
+    w.lambda_dssim = options_.lambda_dssim;
+    wild_ = InTheWild(views_, w);
   }
   adam_m_.assign_zero(g_.size());
   adam_v_.assign_zero(g_.size());
@@ -337,9 +353,12 @@ IterationStats Trainer::step() {
     robust_mask_.exclude(robust_errors_, view.camera.width, view.camera.height, it, options_.seed, &invalid_);
     invalid = &invalid_;
   }
-  const LossValue<float> lv = photometric_loss<float>(state_.image, view.rgb, invalid, view.camera.width,
-                                                      view.camera.height, float(options_.lambda_dssim), &v_image_,
-                                                      options_.mask_normalization);
+  const bool wild = !wild_.empty();
+  if (wild) wild_.forward(view_index, it, state_.image, view.rgb, &wild_render_, &wild_target_);
+  const LossValue<float> lv = photometric_loss<float>(wild ? wild_render_ : state_.image, wild ? wild_target_ : view.rgb,
+                                                      invalid, view.camera.width, view.camera.height,
+                                                      float(options_.lambda_dssim), &v_image_, options_.mask_normalization);
+  if (wild && std::isfinite(lv.loss)) wild_.backward_and_step(view_index, it, state_.image, view.rgb, &v_image_);
   if (!std::isfinite(lv.loss)) {
     std::ostringstream s;
     s << "training diverged at iteration " << it << ": non-finite loss (" << lv.loss << ") on view '"

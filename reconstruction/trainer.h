@@ -14,6 +14,7 @@
 #include "core/progress.h"
 #include "core/train_views.h"
 #include "reconstruction/gaussians.h"
+#include "reconstruction/in_the_wild.h"
 #include "reconstruction/loss.h"
 #include "reconstruction/rasterizer.h"
 #include "reconstruction/robust_mask.h"
@@ -84,6 +85,11 @@ struct TrainOptions {
   // 1.0 was the best of 0.01-1.0 on two weathered training scenes (not the benchmark's); a large
   // painted occluder wants ~0.01 (test reconstruction/trainer).
   double distractor_opacity_weight = 1.0;
+  // The gs-w-lite method (reconstruction/in_the_wild.h): per-view affine appearance and a learned
+  // per-view visibility map with GS-W's (1 - M)^2 regulariser, used after in_the_wild_from iterations.
+  bool in_the_wild = false;
+  int in_the_wild_from = 200;
+  double visibility_weight = 0.2;
   int random_init_count = 50000;      // Gaussians when the dataset has no COLMAP points
   double random_init_near_m = 0.5;    // depth range (m) of the random initialization
   double random_init_far_m = 20.0;
@@ -133,6 +139,7 @@ class Trainer {
   // The scene alone: what is exported (point_cloud.ply) and rendered at test time.
   GaussianSet<float> scene_gaussians() const;
   int64_t num_distractors() const { return num_distractors_; }
+  const InTheWild& in_the_wild() const { return wild_; }
   GaussianSet<float>& mutable_gaussians() { return g_; }  // tests inject faults through this
   const TrainOptions& options() const { return requested_; }    // as given (run.json, resume)
   const TrainOptions& effective_options() const { return options_; }  // with the scaled schedule
@@ -170,6 +177,8 @@ class Trainer {
   int64_t num_distractors_ = 0;
   std::vector<int64_t> rows_;  // this iteration's rendered rows when distractors exist
   GaussianSet<float> sub_, sub_grad_;
+  InTheWild wild_;                              // gs-w-lite only
+  std::vector<float> wild_render_, wild_target_;  // the images its loss compares
   int iteration_ = 0;
   int sh_degree_ = 0;
   int densify_capped_ = 0;

@@ -11,8 +11,9 @@ namespace weathergs::recon {
 
 // ---------------------------------------------------------------------------------------------
 // Checkpoints: "WGSCKPT3", uint64 JSON length, JSON header, then the float arrays in a fixed order,
-// the int32 view counts, the int32 owners (distractors.h), and the robust mask's histogram (doubles;
-// robust runs only). Format 2 had no owners (read as all scene); format 1 had no robust state.
+// the int32 view counts, the int32 owners (distractors.h), the robust mask's histogram (doubles;
+// robust runs only) and the in-the-wild state ("wild_floats" floats; gs-w-lite only). Format 2 had no
+// owners (read as all scene); format 1 had no robust state.
 
 namespace {
 constexpr char kCheckpointMagic[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '3'};
@@ -29,6 +30,7 @@ void Trainer::save_checkpoint(const std::string& path, double train_seconds) con
               {"train_seconds", train_seconds},
               {"robust_threshold", robust_mask_.threshold()},
               {"robust_bins", options_.robust == TrainOptions::Robust::kNone ? 0 : robust_mask_.options().bins},
+              {"wild_floats", wild_.state_size()},
               {"options", options_.to_json()}};
   const std::string h = header.dump();
   std::string out(kCheckpointMagic, 8);
@@ -49,6 +51,7 @@ void Trainer::save_checkpoint(const std::string& path, double train_seconds) con
     const std::vector<double>& h = robust_mask_.histogram();
     out.append(reinterpret_cast<const char*>(h.data()), h.size() * sizeof(double));
   }
+  put(wild_.state());  // gs-w-lite: appearance, visibility and their Adam moments (empty otherwise)
   write_file_atomic(path, out);
 }
 
@@ -83,7 +86,11 @@ double Trainer::load_checkpoint(const std::string& path) {
   const double seconds = h.get<double>("train_seconds");
   const double robust_threshold = h.get<double>("robust_threshold");
   const size_t robust_bins = h.get<size_t>("robust_bins");
+  const size_t wild_floats = h.get_or<size_t>("wild_floats", 0);
   h.finish();
+  if (wild_floats != wild_.state_size())
+    throw InputError(path, "checkpoint in-the-wild state of " + std::to_string(wild_floats) + " values, expected " +
+                               std::to_string(wild_.state_size()));
   const size_t want_bins = options_.robust == TrainOptions::Robust::kNone ? 0 : size_t(robust_mask_.options().bins);
   if (robust_bins != want_bins)
     throw InputError(path, "checkpoint robust_bins = " + std::to_string(robust_bins) + ", expected " +
@@ -91,7 +98,7 @@ double Trainer::load_checkpoint(const std::string& path) {
   const size_t floats_per = 3 + 3 + 4 + 1 + kShFloats;
   const size_t int_arrays = v2 ? 1 : 2;  // view counts (+ owners)
   const size_t expected = 16 + len + n * (3 * floats_per + 2) * sizeof(float) + int_arrays * n * sizeof(int32_t) +
-                        robust_bins * sizeof(double);
+                        robust_bins * sizeof(double) + wild_floats * sizeof(float);
   if (bytes.size() != expected)
     throw InputError(path, "checkpoint size " + std::to_string(bytes.size()) + " bytes, expected " +
                                std::to_string(expected));
@@ -126,6 +133,12 @@ double Trainer::load_checkpoint(const std::string& path) {
     std::vector<double> hist(robust_bins);
     std::memcpy(hist.data(), bytes.data() + off, robust_bins * sizeof(double));
     robust_mask_.restore(std::move(hist), robust_threshold);
+    off += robust_bins * sizeof(double);
+  }
+  if (wild_floats > 0) {
+    std::vector<float> w;
+    get(w, wild_floats);
+    wild_.restore(w);
   }
   owner_ = std::move(owner);
   num_distractors_ = distractors;

@@ -15,6 +15,7 @@ const char* to_string(Method m) {
     case Method::kWeatherGSNoLed: return "weathergs-no-led";
     case Method::kRobust3dgs: return "robust-3dgs";
     case Method::kDesplat: return "desplat";
+    case Method::kGsWLite: return "gs-w-lite";
     case Method::kNerf: return "nerf";
     case Method::kDerainNerf: return "derainnerf";
     case Method::kWeatherGSNerf: return "weathergs-nerf";
@@ -27,7 +28,7 @@ const char* to_string(Method m) {
 std::vector<Method> all_methods() {
   return {Method::k3dgs,     Method::kOracle,         Method::kGtMasks,       Method::kAefTophat,
           Method::kWeatherGS, Method::kWeatherGSNoAef, Method::kWeatherGSNoLed, Method::kRobust3dgs,
-          Method::kDesplat,  Method::kNerf,           Method::kDerainNerf,    Method::kWeatherGSNerf,
+          Method::kDesplat,  Method::kGsWLite,        Method::kNerf,           Method::kDerainNerf,    Method::kWeatherGSNerf,
           Method::kNerfOracle};
 }
 
@@ -57,6 +58,9 @@ std::string method_description(Method m) {
     case Method::kDesplat:
       return "3DGS with DeSplat-style distractor Gaussians: " + std::to_string(kDesplatDistractorsPerView) +
              " per training view in front of its camera, rendered only for that view, dropped at test time";
+    case Method::kGsWLite:
+      return "GS-W-style 3DGS in the wild without a pretrained encoder: per-view affine appearance (identity at "
+             "test time) and a learned per-view visibility map with GS-W's (1 - M)^2 regulariser";
     case Method::kNerf: return "grid radiance field (DVGO/Plenoxels family, docs/nerf.md) on the weathered images";
     case Method::kDerainNerf:
       return "DerainNeRF: LED attention per view (not averaged) as occlusion masks excluded from the radiance "
@@ -85,6 +89,7 @@ Recipe recipe(Method m) {
     case Method::kWeatherGSNoLed: r.particle_filter = true; break;
     case Method::kRobust3dgs: r.robust = true; break;
     case Method::kDesplat: r.distractors_per_view = kDesplatDistractorsPerView; break;
+    case Method::kGsWLite: r.in_the_wild = true; break;
     case Method::kNerf: r.backend = Backend::kNerf; break;
     case Method::kDerainNerf:
       r.backend = Backend::kNerf;

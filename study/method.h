@@ -24,6 +24,7 @@ enum class Method {
   kWeatherGSNoLed,  // ablation: AEF only (while the AEF is the classical one, the same recipe as aef-tophat)
   kRobust3dgs,      // 3DGS with the RobustFilter per-pixel distractor mask (reconstruction/robust_mask.h)
   kDesplat,         // 3DGS with per-view distractor Gaussians, dropped at test time (reconstruction/distractors.h)
+  kGsWLite,         // GS-W-style 3DGS in the wild without its encoder (reconstruction/in_the_wild.h)
   // The radiance-field backend (nerf/, docs/nerf.md): the paper's NeRF-family rows.
   kNerf,           // the grid radiance field on the weathered images (the paper's NeRF row)
   kDerainNerf,     // DerainNeRF: per-view LED masks (not averaged) excluded from the radiance field's MSE
@@ -55,6 +56,7 @@ struct Recipe {
   bool led_per_view = false;     // the LED's per-view maps instead of the mean over the training views
   bool robust = false;           // the trainer's RobustFilter mask (TrainOptions::Robust::kRobustFilter)
   int distractors_per_view = 0;  // TrainOptions::distractors_per_view (desplat)
+  bool in_the_wild = false;      // TrainOptions::in_the_wild (gs-w-lite)
 };
 Recipe recipe(Method m);
 

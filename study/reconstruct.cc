@@ -196,6 +196,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     if (r.robust) t.train.robust = recon::TrainOptions::Robust::kRobustFilter;
     t.train.distractors_per_view = r.distractors_per_view;
     t.train.distractor_opacity_weight = o.distractor_opacity_weight;
+    t.train.in_the_wild = r.in_the_wild;
     const fs::path run_json = run / kModelDir / "run.json";
     bool trained = false;
     if (fs::exists(run_json)) {
