@@ -58,40 +58,22 @@ void check_gradients(double lambda, int it, bool check_logits) {
   // truncation O(h^2). Gradients here are 1e-4 .. 1e-1.
   constexpr float kH = 1e-3f;
   constexpr double kAbs = 1e-4, kRel = 2e-2;
-  for (size_t k = 0; k < 12; ++k) {
-    float& p = w.affine(0)[k];
-    const float p0 = p;
-    p = p0 + kH;
+  // The central difference of the loss in one value, checked against its analytic gradient.
+  auto check = [&](float& x, float analytic, const char* what, size_t k) {
+    const float x0 = x;
+    x = x0 + kH;
     const double lp = total_loss(w, it, c, t, lambda);
-    p = p0 - kH;
+    x = x0 - kH;
     const double lm = total_loss(w, it, c, t, lambda);
-    p = p0;
+    x = x0;
     const double fd = (lp - lm) / (2 * kH);
-    EXPECT_NEAR(ga[k], fd, kAbs + kRel * std::abs(fd)) << "affine " << k;
-  }
+    EXPECT_NEAR(analytic, fd, kAbs + kRel * std::abs(fd)) << what << " " << k;
+  };
+  for (size_t k = 0; k < 12; ++k) check(w.affine(0)[k], ga[k], "affine", k);
   // d loss / d render (what the Gaussians receive), on a few pixels and channels.
-  for (size_t k = 0; k < c.size(); k += 37) {
-    const float c0 = c[k];
-    c[k] = c0 + kH;
-    const double lp = total_loss(w, it, c, t, lambda);
-    c[k] = c0 - kH;
-    const double lm = total_loss(w, it, c, t, lambda);
-    c[k] = c0;
-    const double fd = (lp - lm) / (2 * kH);
-    EXPECT_NEAR(v[k], fd, kAbs + kRel * std::abs(fd)) << "render value " << k;
-  }
+  for (size_t k = 0; k < c.size(); k += 37) check(c[k], v[k], "render value", k);
   if (!check_logits) return;
-  for (size_t k = 0; k < gl.size(); k += 3) {
-    float& p = w.logits(0)[k];
-    const float p0 = p;
-    p = p0 + kH;
-    const double lp = total_loss(w, it, c, t, lambda);
-    p = p0 - kH;
-    const double lm = total_loss(w, it, c, t, lambda);
-    p = p0;
-    const double fd = (lp - lm) / (2 * kH);
-    EXPECT_NEAR(gl[k], fd, kAbs + kRel * std::abs(fd)) << "logit " << k;
-  }
+  for (size_t k = 0; k < gl.size(); k += 3) check(w.logits(0)[k], gl[k], "logit", k);
 }
 
 TEST(InTheWildTest, AppearanceGradientMatchesFiniteDifferences) {
