@@ -9,7 +9,10 @@
 
 namespace weathergs::evaluator {
 
-bool is_reference_method(const std::string& method) { return method == "oracle" || method == "gt-masks"; }
+// Upper bounds and ground-truth-assisted runs: shown, never ranked (study/method.h).
+bool is_reference_method(const std::string& method) {
+  return method == "oracle" || method == "gt-masks" || method == "nerf-oracle";
+}
 
 namespace {
 
@@ -183,7 +186,8 @@ std::string cost_label(const CostRow& r) { return r.reference ? r.method + " (re
 
 const char* kCostNote =
     "Mean over each method's runs (all variants and seeds; training time with its standard deviation). "
-    "Training: 3DGS optimisation only; AEF + LED: the particle filter and the lens detector before it; "
+    "Training: the optimisation only (3DGS, or the radiance field for the NeRF-family methods); AEF + LED: "
+    "the particle filter and the lens detector before it; render: per test view; "
     "peak memory: the training process's peak resident set.";
 
 std::string render_cost(const std::vector<CostRow>& rows, const std::string& title, TableFormat format) {
