@@ -54,6 +54,15 @@ WeatherClass weather_class_of(const Dataset& ds) {
   return rain ? WeatherClass::kRain : snow ? WeatherClass::kSnow : WeatherClass::kNone;
 }
 
+WeatherClass selector_class_of(const Dataset& ds) {
+  const WeatherClass c = weather_class_of(ds);
+  if (c == WeatherClass::kNone || !ds.has(ImageKind::kTargetNoParticles)) return c;
+  double sum = 0;
+  for (const Camera& cam : ds.cameras)
+    sum += psnr(read_view(ds.path(ImageKind::kImages, cam.name), cam, 3), read_view(ds.path(ImageKind::kTargetNoParticles, cam.name), cam, 3));
+  return ds.cameras.empty() || sum / double(ds.cameras.size()) > kInvisibleParticlesPsnrDb ? WeatherClass::kNone : c;
+}
+
 WeatherClass class_of(AefPluginKind kind) { return kind == AefPluginKind::kDerain ? WeatherClass::kRain : WeatherClass::kSnow; }
 
 std::vector<AefExample> read_aef_examples(const std::string& dataset) {
@@ -149,7 +158,7 @@ SelectorCalibration calibrate_selector(const WeatherSelector& selector, const st
   std::vector<Cached> cache;
   for (const std::string& d : held_out) {
     const Dataset ds = read_dataset(d);
-    Cached c{dataset_name(d), weather_class_of(ds), {}};
+    Cached c{dataset_name(d), selector_class_of(ds), {}};
     for (const Camera& cam : ds.cameras) c.embeddings.push_back(selector.embed(read_view(ds.path(ImageKind::kImages, cam.name), cam, 3), d));
     cache.push_back(std::move(c));
   }
@@ -201,7 +210,7 @@ TrainSelectorResult train_selector(const std::vector<std::string>& train_dataset
   std::vector<SelectorExample> examples;
   for (const std::string& d : train_datasets) {
     const Dataset ds = read_dataset(d);
-    const WeatherClass label = weather_class_of(ds);
+    const WeatherClass label = selector_class_of(ds);
     for (const Camera& c : ds.cameras) examples.push_back({read_view(ds.path(ImageKind::kImages, c.name), c, 3), label});
   }
   TrainSelectorResult result;
@@ -231,6 +240,8 @@ TrainSelectorResult train_selector(const std::vector<std::string>& train_dataset
                    {"calibration",
                     {{"held_out", names_of(held_out)},
                      {"grid", "theta -1..1 step 0.01, maximizing the per-view accuracy over the held-out views"},
+                     {"labels", "dataset.json weather; none where the particles are invisible (input vs no-particle target above " +
+                                    std::to_string(int(kInvisibleParticlesPsnrDb)) + " dB)"},
                      {"theta", cal.theta},
                      {"view_accuracy", cal.view_accuracy},
                      {"views", cal.views},

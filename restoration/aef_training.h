@@ -14,6 +14,12 @@ namespace weathergs::restoration {
 // A dataset's weather class from dataset.json's `weather` ("rain+fog" is rain; clear, fog only or
 // lens drops only are none). InputError when it names both rain and snow.
 WeatherClass weather_class_of(const Dataset& ds);
+// The class the selector should pick: weather_class_of, except that a weathered dataset whose particles
+// the camera barely sees (mean PSNR of images/ against targets/no_particles above
+// kInvisibleParticlesPsnrDb, i.e. an RMS change under 1%) is none: no plugin can help there, and the
+// plugins cost 3 to 30 dB on such views (held-out market_w05/w07/w10 in docs/restoration.md).
+inline constexpr double kInvisibleParticlesPsnrDb = 40;
+WeatherClass selector_class_of(const Dataset& ds);
 // The class a plugin removes.
 WeatherClass class_of(AefPluginKind kind);
 

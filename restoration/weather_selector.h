@@ -1,6 +1,6 @@
 // The AEF's plugin selector without CLIP (docs/restoration.md). The paper picks a plugin by the cosine
 // between a CLIP image embedding and the instruction text against a threshold theta (its eq. 4). Here a
-// tiny weather embedder (a strided CNN over RGB + the full-resolution top-hat of the luminance, global
+// tiny weather embedder (a strided CNN over the full-resolution white top-hat of the luminance, global
 // mean and max pooling, a linear layer, L2-normalized) is trained together with one learned prototype
 // per instruction: "Remove snowy effect in the scene", "Remove rainy effect in the scene." (the
 // released code's strings) and "none" (clear). Decision: the plugin prototype with the larger cosine
@@ -38,8 +38,8 @@ const char* instruction_of(WeatherClass c);
 WeatherClass class_of_instruction(const std::string& text);
 
 struct SelectorArchitecture {
-  int width = 160;        // internal width (the height keeps the aspect ratio)
-  int channels = 16;      // features of the first conv (x1.5, x2 deeper)
+  int width = 300;        // internal width (the height keeps the aspect ratio); the quick profile's own
+  int channels = 8;       // features of the first conv (x1.5, x2 deeper)
   int embedding = 16;     // embedding dimension
   double tophat_radius_px_at_300 = 2.0;  // disk of the luminance top-hat input, scaled with the width
   void validate() const;  // InputError naming the field

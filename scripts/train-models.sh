@@ -6,7 +6,8 @@
 # the held-out PSNRs are measured on a scene the networks never saw.
 #
 #   scripts/train-models.sh BUILD/apps/weathergs TRAINING_DATA OUT_MODELS_DIR [ITERATIONS]
-#   ONLY=led|aef (environment): retrain only those weights (default: all).
+#   ONLY=led|aef|selector (environment): retrain only those weights (default: all; aef = the two
+#   plugins and the selector).
 set -euo pipefail
 BIN=${1:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
 DATA=${2:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
@@ -38,13 +39,16 @@ for d in "$DATA"/*_w[0-9][0-9] "$DATA"/clear/*; do
   name=$(basename "$d")
   if [ "${name%_w[0-9][0-9]}" = "$AEF_HELD_SCENE" ] || [[ " ${held[*]} " == *" $d "* ]]; then aef_held+=("$d"); else aef_train+=("$d"); fi
 done
+mkdir -p "$OUT/aef"
 if [ "$ONLY" = all ] || [ "$ONLY" = aef ]; then
-  mkdir -p "$OUT/aef"
-  echo "train-models: AEF plugins and selector on ${#aef_train[@]} datasets, ${#aef_held[@]} held out (scene $AEF_HELD_SCENE and *_w11)"
+  echo "train-models: AEF plugins on ${#aef_train[@]} datasets, ${#aef_held[@]} held out (scene $AEF_HELD_SCENE and *_w11)"
   for model in derain desnow; do
     "$BIN" --threads 1 train-aef --model $model --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/$model" \
       --iterations "$AEF_ITERATIONS" --seed 1 --threads 1
   done
+fi
+if [ "$ONLY" = all ] || [ "$ONLY" = aef ] || [ "$ONLY" = selector ]; then
+  echo "train-models: weather selector on ${#aef_train[@]} datasets, theta calibrated on ${#aef_held[@]} held out"
   "$BIN" --threads 1 train-aef --model selector --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/selector" \
     --iterations "$SELECTOR_ITERATIONS" --seed 1 --threads 1
 fi
