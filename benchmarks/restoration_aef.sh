@@ -16,7 +16,9 @@ EVAL=${EVAL:-$W}
 wflag=()
 [ -n "$WEIGHTS" ] && wflag=(--weights "$WEIGHTS")
 mkdir -p "$OUT"
-psnr() { /usr/bin/python3 -c 'import json,sys; m=json.load(open(sys.argv[1]))["metrics"]; print("%.2f" % m["psnr"])' "$1"; }
+psnr() {  # "inf" where the images are identical (evaluate writes null)
+  /usr/bin/python3 -c 'import json,sys; p=json.load(open(sys.argv[1]))["metrics"]["psnr"]; print("inf" if p is None else "%.2f" % p)' "$1"
+}
 # choice FILTER_JSON EXPECTED: the scene's plugin and "right/total" of the per-view plugins (a --select per-view run).
 choice() {
   /usr/bin/python3 -c 'import json,sys; j=json.load(open(sys.argv[1])); v=j["views"]
@@ -36,8 +38,8 @@ score() {  # score NAME DATASET DIR GT -> PSNR
     -o "$OUT/$1/$(basename "$3").json" > /dev/null
   psnr "$OUT/$1/$(basename "$3").json"
 }
-echo "| variant | input | top-hat | learned (forced) | default (auto) | clear: top-hat | clear: default | selector on weathered: scene, views right | on clean: scene, views right | ms/view learned |"
-echo "|---|---:|---:|---:|---:|---:|---:|---|---|---:|"
+echo "| variant | input | top-hat | learned (forced) | default (auto) | clear: top-hat | clear: learned (forced) | clear: default | selector on weathered: scene, views right | on clean: scene, views right | ms/view learned |"
+echo "|---|---:|---:|---:|---:|---:|---:|---:|---|---|---:|"
 for d in "$SUITE"/*/; do
   d=${d%/}; name=$(basename "$d")
   [ -f "$d/dataset.json" ] && [ -d "$d/targets/no_particles" ] || continue
@@ -48,6 +50,7 @@ for d in "$SUITE"/*/; do
   "$W" --quiet filter --data "$d" --method learned --task auto --select per-view "${wflag[@]}" --out "$OUT/$name/perview" > /dev/null
   "$W" --quiet filter --data "$d" --method learned --task auto "${wflag[@]}" --out "$OUT/$name/auto" > /dev/null
   "$W" --quiet filter --data "$d" --images clean --method tophat --task always --out "$OUT/$name/clear_tophat" > /dev/null
+  "$W" --quiet filter --data "$d" --images clean --method learned --task $plugin "${wflag[@]}" --out "$OUT/$name/clear_forced" > /dev/null
   "$W" --quiet filter --data "$d" --images clean --method learned --task auto "${wflag[@]}" --out "$OUT/$name/clear_auto" > /dev/null
   "$W" --quiet filter --data "$d" --images clean --method learned --task auto --select per-view "${wflag[@]}" \
     --out "$OUT/$name/clear_perview" > /dev/null
@@ -57,8 +60,9 @@ for d in "$SUITE"/*/; do
   pf=$(score "$name" "$d" "$OUT/$name/forced" "$nt")
   pa=$(score "$name" "$d" "$OUT/$name/auto" "$nt")
   ct=$(score "$name" "$d" "$OUT/$name/clear_tophat" "")
+  cf=$(score "$name" "$d" "$OUT/$name/clear_forced" "")
   ca=$(score "$name" "$d" "$OUT/$name/clear_auto" "")
   read -r sw vw <<< "$(choice "$OUT/$name/perview/filter.json" $plugin)"
   read -r sc vc <<< "$(choice "$OUT/$name/clear_perview/filter.json" none)"
-  echo "| $name | $pi | $pt | $pf | $pa | $ct | $ca | $sw, $vw | $sc, $vc | $(ms "$OUT/$name/forced/filter.json") |"
+  echo "| $name | $pi | $pt | $pf | $pa | $ct | $cf | $ca | $sw, $vw | $sc, $vc | $(ms "$OUT/$name/forced/filter.json") |"
 done

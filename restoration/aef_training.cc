@@ -33,6 +33,12 @@ double psnr(const Image& a, const Image& b) {
   return mse > 0 ? 10 * std::log10(1 / mse) : 100.0;
 }
 
+// Before minutes of training: the folder of the weights must exist.
+void check_out_stem(const std::string& stem) {
+  const fs::path dir = fs::absolute(stem).parent_path();
+  if (!fs::is_directory(dir)) throw InputError(stem, "its folder " + dir.string() + " does not exist");
+}
+
 void check_disjoint(const std::vector<std::string>& train, const std::vector<std::string>& held_out) {
   const std::set<std::string> train_set(train.begin(), train.end());
   for (const std::string& h : held_out)
@@ -102,6 +108,7 @@ TrainAefResult train_aef(AefPluginKind kind, const std::vector<std::string>& tra
                          const std::string& out_stem, const TrainAefOptions& o) {
   o.train.validate();
   if (train_datasets.empty()) throw InputError("train-aef", "no training datasets given");
+  check_out_stem(out_stem);
   check_disjoint(train_datasets, held_out);
   const WeatherClass wanted = class_of(kind);
   auto relevant = [&](const std::string& d) {
@@ -206,6 +213,7 @@ TrainSelectorResult train_selector(const std::vector<std::string>& train_dataset
                                    const std::string& out_stem, const TrainSelectorOptions& o) {
   o.train.validate();
   if (train_datasets.empty()) throw InputError("train-aef", "no training datasets given");
+  check_out_stem(out_stem);
   check_disjoint(train_datasets, held_out);
   std::vector<SelectorExample> examples;
   for (const std::string& d : train_datasets) {
