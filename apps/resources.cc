@@ -55,6 +55,20 @@ std::string find_led_weights(const std::string& flag) {
                                       "or retrain with `make models`.");
 }
 
+std::string find_aef_weights(const std::string& flag) {
+  if (!flag.empty()) return flag;
+  if (std::string e = env("WEATHERGS_AEF_WEIGHTS"); !e.empty()) return e;
+  std::string searched;
+  for (const std::string& d : data_dirs()) {
+    const fs::path dir = fs::path(d) / "models" / "aef";
+    if (fs::is_regular_file(dir / "selector.json")) return dir.string();
+    searched += "\n  " + (dir / "selector.json").string();
+  }
+  throw InputError("AEF weights", "models/aef/selector.json not found. Searched:" + searched +
+                                      "\nInstall weathergs (cmake --install), pass --weights, set WEATHERGS_AEF_WEIGHTS, "
+                                      "or retrain with `make models`.");
+}
+
 std::vector<std::string> lpips_model_search(const std::string& flag) {
   if (!flag.empty()) return {flag};
   if (std::string e = env("WEATHERGS_LPIPS_MODEL"); !e.empty()) return {e};

@@ -27,6 +27,10 @@ std::string find_blender_script(const std::string& flag);
 // staged there). InputError naming every place searched.
 std::string find_led_weights(const std::string& flag);
 
+// The learned AEF's weights folder (derain, desnow and selector .json/.bin): `flag` if given, else
+// $WEATHERGS_AEF_WEIGHTS, else models/aef in the data directories. InputError naming every place searched.
+std::string find_aef_weights(const std::string& flag);
+
 // Where to look for the LPIPS model, in order: `flag` alone if given, else $WEATHERGS_LPIPS_MODEL alone
 // if set, else models/lpips in the data directories, then ./shared/models/lpips and
 // ../shared/models/lpips (a project checkout).

@@ -1,5 +1,6 @@
 // Cost of the restoration part per view: the learned LED (shipped weights, models/led/led) at the
-// paper's 600x400 and the quick 300x200, one view and a batch of 4; the classical AEF at 600x400.
+// paper's 600x400 and the quick 300x200, one view and a batch of 4; the classical AEF at 600x400; the
+// learned AEF plugin (models/aef/derain) and the weather selector (models/aef/selector) per 600x400 view.
 //   build/benchmarks/bench_restoration --benchmark_min_time=2        (threads: --threads N below)
 #include <benchmark/benchmark.h>
 
@@ -7,8 +8,10 @@
 
 #include "core/parallel.h"
 #include "core/rng.h"
+#include "restoration/aef_plugin.h"
 #include "restoration/lens_detector.h"
 #include "restoration/particle_filter.h"
+#include "restoration/weather_selector.h"
 
 namespace {
 
@@ -48,6 +51,20 @@ void BM_ClassicalAef(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(filter_particles(v, {}, "bench"));
 }
 
+// One view on one libtorch thread (AefPlugin::restore); `weathergs filter` runs views in parallel.
+void BM_LearnedAef(benchmark::State& state) {
+  static const AefPlugin p = AefPlugin::load(std::string(WEATHERGS_SOURCE_DIR) + "/models/aef/derain", AefPluginKind::kDerain);
+  const Image v = view(int(state.range(0)), int(state.range(1)));
+  for (auto _ : state) benchmark::DoNotOptimize(p.restore(v, "bench"));
+}
+void BM_Selector(benchmark::State& state) {
+  static const WeatherSelector s = WeatherSelector::load(std::string(WEATHERGS_SOURCE_DIR) + "/models/aef/selector");
+  const Image v = view(600, 400);
+  for (auto _ : state) benchmark::DoNotOptimize(s.select(s.embed(v, "bench")));
+}
+
+BENCHMARK(BM_LearnedAef)->Args({600, 400})->Args({300, 200})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Selector)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LedView)->Args({600, 400, 1})->Args({600, 400, 2})->Args({300, 200, 2})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LedBatch4)->Args({600, 400, 2})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ClassicalAef)->Unit(benchmark::kMillisecond);

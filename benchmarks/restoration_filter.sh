@@ -23,8 +23,8 @@ for d in "$SUITE"/*/; do
   d=${d%/}; name=$(basename "$d")
   [ -f "$d/dataset.json" ] && [ -d "$d/targets/no_particles" ] || continue
   mkdir -p "$OUT/$name"
-  "$W" --quiet filter --data "$d" --out "$OUT/$name/filtered" > /dev/null
-  "$W" --quiet filter --data "$d" --images clean --out "$OUT/$name/filtered_clean" > /dev/null
+  "$W" --quiet filter --method tophat --task always --data "$d" --out "$OUT/$name/filtered" > /dev/null
+  "$W" --quiet filter --method tophat --task always --data "$d" --images clean --out "$OUT/$name/filtered_clean" > /dev/null
   split_dir "$d/images" "$d" train "$OUT/$name/in"
   split_dir "$OUT/$name/filtered" "$d" train "$OUT/$name/out"
   split_dir "$OUT/$name/filtered_clean" "$d" train "$OUT/$name/out_clean"

@@ -1,11 +1,16 @@
-// `weathergs filter`: the particle filter over every view of a dataset (docs/restoration.md).
+// `weathergs filter`: the Atmospheric Effect Filter over every view of a dataset (docs/restoration.md):
+// the classical top-hat (restoration/particle_filter.h) or the learned derain/desnow plugins
+// (restoration/aef_plugin.h), with the weather selector (restoration/weather_selector.h) deciding
+// which plugin, if any, runs.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
 #include "core/dataset_layout.h"
 #include "restoration/particle_filter.h"
+#include "restoration/weather_selector.h"
 
 namespace weathergs::restoration {
 
@@ -17,23 +22,63 @@ inline constexpr const char* kFilterMasksDir = "masks";          // restore mode
 inline constexpr const char* kFilterReportFile = "filter.json";  // written last: the output is complete
 const char* to_string(FilterMode m);
 
+// tophat: the classical filter (no weights; one filter for rain and snow alike). learned: the derain
+// and desnow plugins (weights in `aef_weights`).
+enum class FilterMethod { kTopHat, kLearned };
+const char* to_string(FilterMethod m);
+
+// Which plugin runs on which view.
+//   always: the filter on every view, no selection (the top-hat's behaviour before the selector; the
+//           learned AEF has no plugin for "any weather" and refuses it);
+//   auto:   the weather selector decides, per scene or per view; `none` leaves the view unchanged;
+//   derain / desnow: that plugin on every view (for the top-hat both mean "filter"); none: no view is
+//           filtered (the output is a copy, the masks are empty).
+enum class AefTask { kAlways, kAuto, kDerain, kDesnow, kNone };
+const char* to_string(AefTask t);
+
+// auto's granularity: per scene (the normalized mean embedding of all views: one plugin for the
+// dataset) or per view (the paper's eq. 4 for each image).
+enum class SelectScope { kPerScene, kPerView };
+const char* to_string(SelectScope s);
+
+// The weights in a folder: <dir>/derain.{json,bin}, <dir>/desnow.{json,bin}, <dir>/selector.{json,bin}.
+inline constexpr const char* kDerainStem = "derain";
+inline constexpr const char* kDesnowStem = "desnow";
+inline constexpr const char* kSelectorStem = "selector";
+
 struct FilterDatasetOptions {
   ImageKind input = ImageKind::kImages;  // which images to filter (kImages or kClean)
   FilterMode mode = FilterMode::kRestore;
-  ParticleFilterOptions filter;
+  FilterMethod method = FilterMethod::kTopHat;
+  AefTask task = AefTask::kAlways;
+  // Non-empty: the plugin named by this instruction (class_of_instruction), overriding `task`.
+  std::string instruction;
+  SelectScope scope = SelectScope::kPerScene;
+  std::string aef_weights;  // folder of the learned weights (needed by learned, and by auto)
+  ParticleFilterOptions filter;  // the top-hat's parameters
+  double alpha_threshold = 0.5;  // learned: the particle mask is alpha >= this
+  void validate() const;         // InputError naming the field
 };
 
 struct FilterViewReport {
   std::string view;
+  WeatherClass plugin = WeatherClass::kNone;  // which plugin ran (snow = desnow, rain = derain)
+  bool selected = false;                      // whether `cosine` holds the selector's per-view cosines
+  std::array<double, kWeatherClasses> cosine{};
   double mask_fraction = 0;
+  double seconds = 0;
 };
 struct FilterDatasetReport {
   std::vector<FilterViewReport> views;  // dataset order
+  bool selected = false;                // whether the selector ran
+  Selection scene;                      // per-scene selection (when selected)
+  double selector_seconds_per_view = 0;
   double seconds = 0;
 };
 
-// Every view of the dataset, in parallel; `out` is written atomically with filter.json (method,
-// parameters, per-view mask fraction, seconds). InputError names the dataset, view or option.
+// Every view of the dataset; `out` is written atomically with filter.json (method, task, weights,
+// per-view plugin, cosines, mask fraction, seconds). Every input and every weight file is checked
+// before anything is written; InputError names the dataset, view, file or option.
 FilterDatasetReport filter_dataset(const std::string& dataset, const std::string& out, const FilterDatasetOptions& options);
 
 }  // namespace weathergs::restoration

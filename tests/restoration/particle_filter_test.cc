@@ -116,7 +116,7 @@ TEST(FilterDatasetTest, EveryViewFilteredWithAReportAndNothingOnBadInput) {
   testing::SceneOptions so;
   so.views = 4;
   testing::make_clean_dataset(tmp / "d", so);
-  ASSERT_EQ(run_cli("filter --data " + (tmp / "d") + " --images clean --out " + (tmp / "f"), tmp / "1.log"), 0)
+  ASSERT_EQ(run_cli("filter --method tophat --task always --data " + (tmp / "d") + " --images clean --out " + (tmp / "f"), tmp / "1.log"), 0)
       << read_file(tmp / "1.log");
   const Dataset ds = read_dataset(tmp / "d");
   for (const Camera& c : ds.cameras) {
@@ -128,16 +128,16 @@ TEST(FilterDatasetTest, EveryViewFilteredWithAReportAndNothingOnBadInput) {
   EXPECT_EQ(j.at("method"), "tophat");
   EXPECT_EQ(j.at("views").size(), ds.cameras.size());
   // The same call again gives byte-identical images (any thread count: views are independent).
-  ASSERT_EQ(run_cli("--threads 1 filter --data " + (tmp / "d") + " --images clean --mode mask --out " + (tmp / "m1"),
+  ASSERT_EQ(run_cli("--threads 1 filter --method tophat --task always --data " + (tmp / "d") + " --images clean --mode mask --out " + (tmp / "m1"),
                     tmp / "2.log"), 0);
-  ASSERT_EQ(run_cli("--threads 2 filter --data " + (tmp / "d") + " --images clean --mode mask --out " + (tmp / "m2"),
+  ASSERT_EQ(run_cli("--threads 2 filter --method tophat --task always --data " + (tmp / "d") + " --images clean --mode mask --out " + (tmp / "m2"),
                     tmp / "3.log"), 0);
   for (const Camera& c : ds.cameras)
     EXPECT_EQ(read_file(tmp / ("m1/" + c.name + ".png")), read_file(tmp / ("m2/" + c.name + ".png")));
   // Bad input: exit 2, the file named, nothing written.
-  EXPECT_EQ(run_cli("filter --data " + (tmp / "d") + " --out " + (tmp / "g"), tmp / "4.log"), 2);  // no images/
+  EXPECT_EQ(run_cli("filter --method tophat --task always --data " + (tmp / "d") + " --out " + (tmp / "g"), tmp / "4.log"), 2);  // no images/
   EXPECT_NE(read_file(tmp / "4.log").find("images"), std::string::npos) << read_file(tmp / "4.log");
-  EXPECT_EQ(run_cli("filter --data " + (tmp / "d") + " --images clean --threshold 2 --out " + (tmp / "g"), tmp / "5.log"), 2);
+  EXPECT_EQ(run_cli("filter --method tophat --task always --data " + (tmp / "d") + " --images clean --threshold 2 --out " + (tmp / "g"), tmp / "5.log"), 2);
   EXPECT_NE(read_file(tmp / "5.log").find("threshold"), std::string::npos) << read_file(tmp / "5.log");
   EXPECT_FALSE(fs::exists(tmp / "g"));
 }

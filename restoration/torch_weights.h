@@ -1,0 +1,92 @@
+// Internal to restoration/: the weights file pair of the learned AEF plugins and the weather selector
+// (`<stem>.json` manifest + `<stem>.bin` float32 blob, the LED's layout). Includes libtorch, so only
+// the libtorch translation units (aef_plugin.cc, weather_selector.cc) include it.
+#pragma once
+
+#include <torch/torch.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/atomic_file.h"
+#include "core/error.h"
+#include "core/json_reader.h"
+#include "core/sha256.h"
+
+namespace weathergs::restoration::detail {
+
+inline std::string shape_string(const std::vector<int64_t>& s) {
+  std::string out = "[";
+  for (size_t i = 0; i < s.size(); ++i) out += (i ? ", " : "") + std::to_string(s[i]);
+  return out + "]";
+}
+
+inline const char* kWeightsFix = "; retrain with `make models` or restore the file from the repository (models/README.md)";
+
+// Writes `<stem>.bin` (parameters in named_parameters order) and `<stem>.json` (`manifest` plus the
+// tensor table and the blob's sha256), each atomically.
+inline void save_weights(const torch::nn::Module& module, const std::string& stem, Json manifest) {
+  std::string blob;
+  Json table = Json::array();
+  for (const auto& p : module.named_parameters()) {
+    const torch::Tensor t = p.value().detach().contiguous().to(torch::kFloat32);
+    table.push_back({{"name", p.key()}, {"shape", t.sizes().vec()}});
+    blob.append(reinterpret_cast<const char*>(t.data_ptr<float>()), size_t(t.numel()) * sizeof(float));
+  }
+  manifest["tensors"] = table;
+  manifest["weights_file"] = std::filesystem::path(stem + ".bin").filename().string();
+  manifest["weights_sha256"] = sha256_hex(blob);
+  write_file_atomic(stem + ".bin", blob);
+  write_file_atomic(stem + ".json", manifest.dump(2) + "\n");
+}
+
+// Opens `<stem>.json` and checks its format and version; InputError naming the file and the fix.
+inline JsonReader open_weights(const std::string& stem, const std::string& format, int version, const std::string& what) {
+  const std::string json_path = stem + ".json";
+  if (!std::filesystem::exists(json_path)) throw InputError(json_path, "missing: no " + what + " weights manifest" + kWeightsFix);
+  JsonReader r = JsonReader::from_file(json_path);
+  const std::string f = r.get_or<std::string>("format", "");
+  if (f != format)
+    throw InputError(r.where("format"), "expected \"" + format + "\" (" + what + " weights), got \"" + f + "\"" + kWeightsFix);
+  const int v = r.get<int>("version");
+  if (v != version)
+    throw InputError(r.where("version"), "expected " + what + " weights version " + std::to_string(version) + ", got " +
+                                             std::to_string(v) + kWeightsFix);
+  return r;
+}
+
+// Reads `<stem>.bin` into the module's parameters after checking the sha256 and the tensor table.
+inline void load_weights(torch::nn::Module& module, const JsonReader& r, const std::string& stem) {
+  const std::string bin_path = stem + ".bin";
+  if (!std::filesystem::exists(bin_path)) throw InputError(bin_path, std::string("missing: the weights blob") + kWeightsFix);
+  std::ifstream in(bin_path, std::ios::binary);
+  const std::string blob((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (sha256_hex(blob) != r.get<std::string>("weights_sha256"))
+    throw InputError(bin_path, "corrupt: its sha256 differs from " + stem + ".json" + kWeightsFix);
+  const auto params = module.named_parameters();
+  const JsonReader table = r.child("tensors");
+  if (table.size() != params.size())
+    throw InputError(table.where(), "expected " + std::to_string(params.size()) + " tensors for this architecture, got " +
+                                        std::to_string(table.size()) + kWeightsFix);
+  size_t offset = 0;
+  torch::NoGradGuard no_grad;
+  for (size_t i = 0; i < params.size(); ++i) {
+    const JsonReader e = table.at(i);
+    const auto& p = params[i];
+    const std::string name = e.get<std::string>("name");
+    const std::vector<int64_t> shape = e.get<std::vector<int64_t>>("shape");
+    if (name != p.key() || shape != p.value().sizes().vec())
+      throw InputError(e.where(), "expected tensor \"" + p.key() + "\" of shape " + shape_string(p.value().sizes().vec()) +
+                                      " (this build's architecture), got \"" + name + "\" of shape " + shape_string(shape) +
+                                      ": the weights are for another version of the network" + kWeightsFix);
+    const size_t bytes = size_t(p.value().numel()) * sizeof(float);
+    if (offset + bytes > blob.size()) throw InputError(bin_path, std::string("truncated: shorter than its tensor table") + kWeightsFix);
+    std::memcpy(p.value().data_ptr<float>(), blob.data() + offset, bytes);
+    offset += bytes;
+  }
+  if (offset != blob.size()) throw InputError(bin_path, std::string("longer than its tensor table") + kWeightsFix);
+}
+
+}  // namespace weathergs::restoration::detail
