@@ -15,7 +15,7 @@ struct ReconstructArgs {
   study::ReconstructOptions options;
   std::string method = "3dgs";
   bool no_triangulate = false;
-  std::string led_weights;
+  std::string led_weights, aef_weights;
   double led_threshold = 0;
   std::string mask_normalization = "valid";
   ScoringFlags scoring;
@@ -29,6 +29,8 @@ int run(ReconstructArgs& a) {
   o.mask_normalization = a.mask_normalization == "reference" ? recon::MaskNormalization::kReference
                                                              : recon::MaskNormalization::kValid;
   if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
+  if (study::recipe(o.method).particle_filter && study::recipe(o.method).aef == restoration::FilterMethod::kLearned)
+    o.aef_weights = find_aef_weights(a.aef_weights);
   if (a.led_threshold > 0) o.led_mask.threshold = a.led_threshold;
   const bool nerf = study::recipe(o.method).backend == study::Backend::kNerf;
   const int total = nerf ? o.nerf.iterations : o.iterations;
@@ -103,6 +105,9 @@ Command make(CLI::App& root) {
   sub->add_option("--led-weights", a->led_weights,
                   "Lens Effect Detector weights stem (weathergs, weathergs-no-aef); default $WEATHERGS_LED_WEIGHTS, else "
                   "the installed models/led/led");
+  sub->add_option("--aef-weights", a->aef_weights,
+                  "Learned AEF weights folder (derain, desnow, selector; weathergs, weathergs-no-led, weathergs-nerf); "
+                  "default $WEATHERGS_AEF_WEIGHTS, else the installed models/aef");
   sub->add_option("--led-threshold", a->led_threshold, "LED mask threshold (default: the weights' calibrated one)")
       ->check(CLI::Range(0.0, 1.0));
   a->scoring.add_to(sub);

@@ -48,10 +48,10 @@ std::string method_description(Method m) {
     case Method::kGtMasks: return "3DGS on the weathered images, ground-truth particle and lens masks excluded from the loss";
     case Method::kAefTophat: return "classical particle filter (morphological top-hat) on every view, then 3DGS";
     case Method::kWeatherGS:
-      return "WeatherGS: AEF (classical top-hat) on every view, LED on the filtered views averaged over the training "
-             "views, 3DGS with the LED mask excluded from the loss";
+      return "WeatherGS: AEF (learned derain/desnow plugin chosen by the weather selector) on every view, LED on the "
+             "filtered views averaged over the training views, 3DGS with the LED mask excluded from the loss";
     case Method::kWeatherGSNoAef: return "WeatherGS without the AEF: LED on the raw views, masked 3DGS on the raw images";
-    case Method::kWeatherGSNoLed: return "WeatherGS without the LED: AEF (classical top-hat) on every view, then 3DGS";
+    case Method::kWeatherGSNoLed: return "WeatherGS without the LED: AEF (learned, selector) on every view, then 3DGS";
     case Method::kRobust3dgs:
       return "3DGS with the RobustFilter distractor mask (SpotLessSplats' robust baseline: pixels above the running "
              "70th-percentile error excluded from the loss, annealed), no opacity reset";
@@ -66,7 +66,7 @@ std::string method_description(Method m) {
       return "DerainNeRF: LED attention per view (not averaged) as occlusion masks excluded from the radiance "
              "field's MSE";
     case Method::kWeatherGSNerf:
-      return "Ours-NeRF: AEF (classical top-hat) on every view, LED averaged over the training views, radiance "
+      return "Ours-NeRF: AEF (learned, selector) on every view, LED averaged over the training views, radiance "
              "field with the LED mask excluded";
     case Method::kNerfOracle: return "grid radiance field on the clean images (its upper bound)";
   }
@@ -83,7 +83,10 @@ Recipe recipe(Method m) {
       r.clean_points = true;
       break;
     case Method::kGtMasks: r.masks = recon::TrainMasks::kAll; break;
-    case Method::kAefTophat: r.particle_filter = true; break;
+    case Method::kAefTophat:
+      r.particle_filter = true;
+      r.aef = restoration::FilterMethod::kTopHat;
+      break;
     case Method::kWeatherGS: r.particle_filter = r.lens_detector = true; break;
     case Method::kWeatherGSNoAef: r.lens_detector = true; break;
     case Method::kWeatherGSNoLed: r.particle_filter = true; break;

@@ -1,14 +1,15 @@
 // The reconstruction methods of the study, one recipe each (docs/study.md). A recipe says what a
 // method trains on: which images, which loss masks, which SfM points. Methods that need the
-// restoration part: the Atmospheric Effect Filter (today the classical top-hat filter: no learned AEF
-// exists yet) and the learned Lens Effect Detector. Methods run on one of two backends: 3DGS
-// (reconstruction/) or the grid radiance field (nerf/).
+// restoration part: the Atmospheric Effect Filter (the learned derain/desnow plugins chosen by the
+// weather selector, or the classical top-hat) and the learned Lens Effect Detector. Methods run on one
+// of two backends: 3DGS (reconstruction/) or the grid radiance field (nerf/).
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "reconstruction/run.h"
+#include "restoration/filter_dataset.h"
 
 namespace weathergs::study {
 
@@ -18,10 +19,10 @@ enum class Method {
   kGtMasks,  // 3DGS on the weathered images with the generator's particle and lens masks excluded
   kAefTophat,  // the classical AEF (restoration/particle_filter.h) on every view, then 3DGS on the
                // filtered images: WeatherGS's first stage without learned weights and without the LED
-  kWeatherGS,       // AEF on every view -> LED on the filtered views, averaged over the training views ->
-                    // 3DGS on the filtered images with the LED mask excluded from the loss
+  kWeatherGS,       // AEF (learned plugins, selector on the scene) -> LED on the filtered views, averaged
+                    // over the training views -> 3DGS on the filtered images, LED mask excluded from the loss
   kWeatherGSNoAef,  // ablation (the paper's Table III): LED on the raw views, 3DGS on the raw images, masked
-  kWeatherGSNoLed,  // ablation: AEF only (while the AEF is the classical one, the same recipe as aef-tophat)
+  kWeatherGSNoLed,  // ablation: the learned AEF only
   kRobust3dgs,      // 3DGS with the RobustFilter per-pixel distractor mask (reconstruction/robust_mask.h)
   kDesplat,         // 3DGS with per-view distractor Gaussians, dropped at test time (reconstruction/distractors.h)
   kGsWLite,         // GS-W-style 3DGS in the wild without its encoder (reconstruction/in_the_wild.h)
@@ -50,7 +51,10 @@ struct Recipe {
   recon::TrainImages images = recon::TrainImages::kImages;
   recon::TrainMasks masks = recon::TrainMasks::kNone;
   bool clean_points = false;  // initialize from sparse_clean/0 (clean/ triangulated) instead of sparse/0
-  bool particle_filter = false;  // train on the classical AEF's restored images (RUN/filtered/)
+  bool particle_filter = false;  // train on the AEF's restored images (RUN/filtered/)
+  // Which AEF: the learned derain/desnow plugins with the weather selector deciding per scene (the
+  // better one on the benchmark, docs/restoration.md), or the classical top-hat on every view.
+  restoration::FilterMethod aef = restoration::FilterMethod::kLearned;
   bool lens_detector = false;    // exclude the LED's mask (RUN/detected/) from the loss; the LED sees the
                                  // filtered images when particle_filter, else the raw ones
   bool led_per_view = false;     // the LED's per-view maps instead of the mean over the training views

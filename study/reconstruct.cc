@@ -47,6 +47,9 @@ void ReconstructOptions::validate() const {
   colmap.validate();
   led_mask.validate();
   nerf.validate("reconstruct options: nerf");
+  if (recipe(method).particle_filter && recipe(method).aef == restoration::FilterMethod::kLearned && aef_weights.empty())
+    throw InputError("reconstruct options", std::string("aef_weights is empty: method ") + to_string(method) +
+                                                " needs the learned AEF's weights (--aef-weights)");
   if (recipe(method).lens_detector && led_weights.empty())
     throw InputError("reconstruct options", std::string("led_weights is empty: method ") + to_string(method) +
                                                 " needs the Lens Effect Detector's weights (--led-weights)");
@@ -106,9 +109,14 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
 
   // 2. Restoration: the classical AEF on every view (kept when an earlier run made it).
   if (r.particle_filter && !fs::exists(run / kFilteredDir / restoration::kFilterReportFile)) {
-    stage("filtering particles (classical AEF) on every view");
     restoration::FilterDatasetOptions f;
     f.filter = o.particle_filter;
+    f.method = r.aef;
+    if (r.aef == restoration::FilterMethod::kLearned) {
+      f.task = restoration::AefTask::kAuto;  // the selector decides, per scene, which plugin (or none)
+      f.aef_weights = o.aef_weights;
+    }
+    stage(std::string("filtering particles (AEF: ") + restoration::to_string(r.aef) + ") on every view");
     restoration::filter_dataset(o.dataset, (run / kFilteredDir).string(), f);
   }
 

@@ -2,7 +2,7 @@
 // none, training, test renders, evaluation against the clean ground truth.
 //
 // The run folder:
-//   filtered/           the classical AEF's images of every view (+ masks/, filter.json)
+//   filtered/           the AEF's images of every view (+ masks/, filter.json: plugin chosen per view)
 //   detected/           the LED's loss masks of every view (detect.json)
 //   sparse/0/           COLMAP points triangulated here when the dataset has none (the dataset itself
 //                       is never modified); logs/colmap/ its logs
@@ -55,7 +55,10 @@ struct ReconstructOptions {
   PointsPolicy points = PointsPolicy::kAuto;
   datagen::ColmapOptions colmap;
   evaluator::ScoringOptions scoring;
-  restoration::ParticleFilterOptions particle_filter;  // aef-tophat, weathergs, weathergs-no-led
+  restoration::ParticleFilterOptions particle_filter;  // the top-hat's parameters (aef-tophat)
+  // The learned AEF's weights folder (derain, desnow, selector; restoration/filter_dataset.h): required
+  // by weathergs, weathergs-no-led and weathergs-nerf.
+  std::string aef_weights;
   std::string led_weights;  // weathergs, weathergs-no-aef: the LED weights stem (required for them)
   restoration::LedMaskOptions led_mask;
   // Radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle); its seed is `seed`.

@@ -49,6 +49,7 @@ ReconstructOptions options(const std::string& data, const std::string& out, Meth
   o.points = PointsPolicy::kDataset;  // no COLMAP: the random initialization (fast, deterministic)
   o.scoring.lpips = false;
   o.led_weights = std::string(WEATHERGS_SOURCE_DIR) + "/models/led/led";  // the shipped weights
+  o.aef_weights = std::string(WEATHERGS_SOURCE_DIR) + "/models/aef";
   // Radiance-field methods: a small lattice and a short run (the structure is what is tested here;
   // tests/nerf checks the field itself).
   o.nerf.iterations = 80;
