@@ -49,7 +49,7 @@ std::string method_description(Method m) {
     case Method::kAefTophat: return "classical particle filter (morphological top-hat) on every view, then 3DGS";
     case Method::kWeatherGS:
       return "WeatherGS: AEF (learned derain/desnow plugin chosen by the weather selector) on every view, LED on the "
-             "filtered views averaged over the training views, 3DGS with the LED mask excluded from the loss";
+             "raw views averaged over the training views, 3DGS on the filtered images with the LED mask excluded";
     case Method::kWeatherGSNoAef: return "WeatherGS without the AEF: LED on the raw views, masked 3DGS on the raw images";
     case Method::kWeatherGSNoLed: return "WeatherGS without the LED: AEF (learned, selector) on every view, then 3DGS";
     case Method::kRobust3dgs:

@@ -120,13 +120,12 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     restoration::filter_dataset(o.dataset, (run / kFilteredDir).string(), f);
   }
 
-  // 2b. The LED on the views 3DGS trains on, averaged over the training views.
+  // 2b. The LED on the raw views (method.h says why), averaged over the training views.
   if (r.lens_detector && !fs::exists(run / kDetectedDir / restoration::kDetectReportFile)) {
     stage("detecting lens drops (LED, averaged over the training views)");
     restoration::DetectDatasetOptions d;
     d.weights = o.led_weights;
     d.mask = o.led_mask;
-    if (r.particle_filter) d.images_dir = (run / kFilteredDir).string();
     if (r.led_per_view) d.averaging = restoration::LedAveraging::kPerView;
     restoration::detect_dataset(o.dataset, (run / kDetectedDir).string(), d);
   }
