@@ -16,6 +16,7 @@
 #include "core/progress.h"
 #include "core/rng.h"
 #include "core/sha256.h"
+#include "restoration/torch_weights.h"
 
 namespace weathergs::restoration {
 
@@ -150,12 +151,6 @@ void examples_to_tensors(const std::vector<LedExample>& examples, const LedArchi
   }
 }
 
-std::string shape_string(const std::vector<int64_t>& s) {
-  std::string out = "[";
-  for (size_t i = 0; i < s.size(); ++i) out += (i ? ", " : "") + std::to_string(s[i]);
-  return out + "]";
-}
-
 }  // namespace
 
 void LedArchitecture::validate() const {
@@ -226,68 +221,21 @@ int64_t LensDetector::parameter_count() const {
 }
 
 void LensDetector::save(const std::string& stem, const Json& extra) const {
-  std::string blob;
-  Json table = Json::array();
-  for (const auto& p : impl_->net->named_parameters()) {
-    const torch::Tensor t = p.value().detach().contiguous().to(torch::kFloat32);
-    table.push_back({{"name", p.key()}, {"shape", t.sizes().vec()}});
-    blob.append(reinterpret_cast<const char*>(t.data_ptr<float>()), size_t(t.numel()) * sizeof(float));
-  }
   Json j = extra.is_object() ? extra : Json::object();
   j["format"] = kLedFormat;
   j["version"] = kLedFormatVersion;
   j["architecture"] = impl_->arch.to_json();
   j["threshold"] = impl_->threshold;
   j["parameters"] = parameter_count();
-  j["tensors"] = table;
-  j["weights_file"] = fs::path(stem + ".bin").filename().string();
-  j["weights_sha256"] = sha256_hex(blob);
-  write_file_atomic(stem + ".bin", blob);
-  write_file_atomic(stem + ".json", j.dump(2) + "\n");
+  detail::save_weights(*impl_->net, stem, j);  // + the tensor table, the blob and its sha256
 }
 
 LensDetector LensDetector::load(const std::string& stem) {
-  const std::string json_path = stem + ".json", bin_path = stem + ".bin";
-  const std::string fix = "; retrain with `make models` or restore the file from the repository (models/README.md)";
-  if (!fs::exists(json_path)) throw InputError(json_path, "missing: no LED weights manifest" + fix);
-  const JsonReader r = JsonReader::from_file(json_path);
-  const std::string format = r.get_or<std::string>("format", "");
-  if (format != kLedFormat) throw InputError(r.where("format"), "expected \"" + std::string(kLedFormat) + "\" (LED weights), got \"" + format + "\"" + fix);
-  const int version = r.get<int>("version");
-  if (version != kLedFormatVersion)
-    throw InputError(r.where("version"), "expected LED weights version " + std::to_string(kLedFormatVersion) + ", got " +
-                                             std::to_string(version) + fix);
+  const JsonReader r = detail::open_weights(stem, kLedFormat, kLedFormatVersion, "LED");
   const LedArchitecture arch = LedArchitecture::from_json(r.child("architecture"));
-  if (!fs::exists(bin_path)) throw InputError(bin_path, "missing: the LED weights blob" + fix);
-  std::ifstream in(bin_path, std::ios::binary);
-  const std::string blob((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (sha256_hex(blob) != r.get<std::string>("weights_sha256"))
-    throw InputError(bin_path, "corrupt: its sha256 differs from " + json_path + fix);
   LensDetector d(arch, 0);
-  const auto params = d.impl_->net->named_parameters();
-  const JsonReader table = r.child("tensors");
-  if (table.size() != params.size())
-    throw InputError(table.where(), "expected " + std::to_string(params.size()) + " tensors for this architecture, got " +
-                                        std::to_string(table.size()) + fix);
-  size_t offset = 0;
-  torch::NoGradGuard no_grad;
-  for (size_t i = 0; i < params.size(); ++i) {
-    const JsonReader e = table.at(i);
-    const auto& p = params[i];
-    const std::string name = e.get<std::string>("name");
-    const std::vector<int64_t> shape = e.get<std::vector<int64_t>>("shape");
-    if (name != p.key() || shape != p.value().sizes().vec())
-      throw InputError(e.where(), "expected tensor \"" + p.key() + "\" of shape " + shape_string(p.value().sizes().vec()) +
-                                      " (this build's architecture), got \"" + name + "\" of shape " + shape_string(shape) +
-                                      ": the weights are for another version of the network" + fix);
-    const size_t bytes = size_t(p.value().numel()) * sizeof(float);
-    if (offset + bytes > blob.size()) throw InputError(bin_path, "truncated: shorter than its tensor table" + fix);
-    std::memcpy(p.value().data_ptr<float>(), blob.data() + offset, bytes);
-    offset += bytes;
-  }
-  if (offset != blob.size()) throw InputError(bin_path, "longer than its tensor table" + fix);
-  const double t = r.get_number("threshold", 1e-6, 1 - 1e-6);
-  d.impl_->threshold = t;
+  detail::load_weights(*d.impl_->net, r, stem);
+  d.impl_->threshold = r.get_number("threshold", 1e-6, 1 - 1e-6);
   d.impl_->metadata = r.value();
   return d;
 }

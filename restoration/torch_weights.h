@@ -1,6 +1,6 @@
-// Internal to restoration/: the weights file pair of the learned AEF plugins and the weather selector
-// (`<stem>.json` manifest + `<stem>.bin` float32 blob, the LED's layout). Includes libtorch, so only
-// the libtorch translation units (aef_plugin.cc, weather_selector.cc) include it.
+// Internal to restoration/: the weights file pair of the learned networks (`<stem>.json` manifest +
+// `<stem>.bin` float32 blob): the LED, the AEF plugins and the weather selector. Includes libtorch, so
+// only the libtorch translation units (lens_detector.cc, aef_plugin.cc, weather_selector.cc) include it.
 #pragma once
 
 #include <torch/torch.h>
