@@ -35,6 +35,15 @@ void sh_basis(const Eigen::Vector3d& d, float y[kShCoeffs]) {
   y[3] = -kSh1 * float(d.x());
 }
 
+// Corner c = (bit 0: +u, bit 1: +v, bit 2: +w) of a cell: the one weight order of the march and of
+// the gradient spread.
+inline void trilinear_weights(float fu, float fv, float fw, float wt[8]) {
+  wt[0] = (1 - fu) * (1 - fv) * (1 - fw), wt[1] = fu * (1 - fv) * (1 - fw);
+  wt[2] = (1 - fu) * fv * (1 - fw), wt[3] = fu * fv * (1 - fw);
+  wt[4] = (1 - fu) * (1 - fv) * fw, wt[5] = fu * (1 - fv) * fw;
+  wt[6] = (1 - fu) * fv * fw, wt[7] = fu * fv * fw;
+}
+
 float softplus_inverse(float y) { return y > 20 ? y : std::log(std::expm1(y)); }
 
 }  // namespace
@@ -48,10 +57,8 @@ Ray pixel_ray(const Camera& camera, int x, int y) {
 void spread_sample_grad(const SampleGrad& sg, const GridDims& d, int k_lo, int k_hi, float* grad, uint8_t* touched) {
   const int64_t plane = int64_t(d.nu) * d.nv;
   const int k0 = int(sg.base / plane);
-  const float wt[8] = {(1 - sg.fu) * (1 - sg.fv) * (1 - sg.fw), sg.fu * (1 - sg.fv) * (1 - sg.fw),
-                       (1 - sg.fu) * sg.fv * (1 - sg.fw),       sg.fu * sg.fv * (1 - sg.fw),
-                       (1 - sg.fu) * (1 - sg.fv) * sg.fw,       sg.fu * (1 - sg.fv) * sg.fw,
-                       (1 - sg.fu) * sg.fv * sg.fw,             sg.fu * sg.fv * sg.fw};
+  float wt[8];
+  trilinear_weights(sg.fu, sg.fv, sg.fw, wt);
   float feat[3 * kShCoeffs];
   for (int b = 0; b < kShCoeffs; ++b)
     for (int ch = 0; ch < 3; ++ch) feat[3 * b + ch] = sg.sh[b] * sg.d_pre[ch];
@@ -215,9 +222,8 @@ RayResult RadianceField::march(const Ray& ray, float jitter, const MarchSettings
           occupancy_[size_t(i + int64_t(dims_.nu - 1) * (j + int64_t(dims_.nv - 1) * kk))] == 0)
         continue;
       const float fu = float(gc[0] - i), fv = float(gc[1] - j), fw = float(gc[2] - kk);
-      const float wt[8] = {(1 - fu) * (1 - fv) * (1 - fw), fu * (1 - fv) * (1 - fw), (1 - fu) * fv * (1 - fw),
-                           fu * fv * (1 - fw),             (1 - fu) * (1 - fv) * fw, fu * (1 - fv) * fw,
-                           (1 - fu) * fv * fw,             fu * fv * fw};
+      float wt[8];
+      trilinear_weights(fu, fv, fw, wt);
       const int64_t base = index(i, j, kk);
       const float* p = params_.data() + base * kStride;
       float raw = 0;
