@@ -6,7 +6,8 @@
 #   in : JOB.json  {"scene": {...}, "scene_file": "...", "surface": {...}, "lights": {...},
 #                   "render": {...}, "camera": {... "clip_start_m", "clip_end_m"}, "markers": [...],
 #                   "outputs": {"images": IMG, "depth": DEPTH}, "output_dir": "..."}
-#   out: <output_dir>/IMG/<view>.png         8-bit sRGB (view transform "Standard")
+#   out: <output_dir>/IMG/<view>.png         8-bit sRGB (view transform "Standard"); with
+#                                            render.float_images: IMG/<view>.exr, scene-linear float32
 #        <output_dir>/DEPTH/<view>.exr       planar camera z, float32, R=G=B, background 65504 (EEVEE)
 # Folder names and the clip range come from the job: datagen/blender.cc owns them.
 #        <output_dir>/cameras.json           DATASET_FORMAT.md cameras, recomputed from Blender's camera
@@ -70,6 +71,12 @@ def run(job):
     cam_data.shift_y = 0.0
     cam_data.clip_start = cam_spec["clip_start_m"]
     cam_data.clip_end = cam_spec["clip_end_m"]
+    if cam_spec.get("dof"):
+        # Thin-lens depth of field with the camera's lens data (validation renders; the datasets'
+        # renders are pinholes and the generator applies the lens).
+        cam_data.dof.use_dof = True
+        cam_data.dof.focus_distance = cam_spec["dof"]["focus_distance_m"]
+        cam_data.dof.aperture_fstop = cam_spec["dof"]["f_number"]
     cam = bpy.data.objects.new("camera", cam_data)
     scene.collection.objects.link(cam)
     scene.camera = cam
@@ -96,7 +103,8 @@ def run(job):
         if render["engine"] == "cycles":
             scene.cycles.seed = view.get("seed", render["seed"])
         fo.file_slots[0].path = view["name"] + "_"
-        scene.render.filepath = os.path.join(out_dir, image_dir, view["name"] + ".png")
+        ext = ".exr" if render.get("float_images", False) else ".png"
+        scene.render.filepath = os.path.join(out_dir, image_dir, view["name"] + ext)
         bpy.ops.render.render(write_still=True)
         produced = os.path.join(out_dir, depth_dir, f"{view['name']}_{frame:04d}.exr")
         os.replace(produced, os.path.join(out_dir, depth_dir, view["name"] + ".exr"))

@@ -136,7 +136,18 @@ GenerateSummary generate_variant(const std::string& scene_path, const std::strin
     wopts.copy_exports = false;
     wopts.write_targets = o.targets;
     wopts.style = o.style;  // sparse/0 and transforms.json are made below from the weathered images
-    const JsonReader spec(variant.weather, scene.file, "/variants/" + variant.name + "/weather");
+    // The particles are lit by the scene's sun (docs/generator.md, "Photometry"): the spec says so
+    // unless it names its own lighting.
+    Json weather = variant.weather;
+    const Json& sun = variant.lights.at("sun");
+    if (!weather.contains("lighting") && sun.at("strength").get<double>() > 0) {
+      Json irradiance = Json::array();
+      for (int c = 0; c < 3; ++c) irradiance.push_back(sun.at("strength").get<double>() * sun.at("color")[c].get<double>());
+      weather["lighting"] = {{"sun", {{"elevation_deg", sun.at("elevation_deg")},
+                                      {"azimuth_deg", sun.at("azimuth_deg")},
+                                      {"irradiance", irradiance}}}};
+    }
+    const JsonReader spec(weather, scene.file, "/variants/" + variant.name + "/weather");
     run_weather(s.cache_entry, spec, root.string(), wopts);
   } else {
     for (ImageKind k : {ImageKind::kClean, ImageKind::kImages, ImageKind::kDepth})

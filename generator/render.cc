@@ -12,6 +12,10 @@
 
 namespace weathergs {
 
+const char* to_string(ParticleShading shading) {
+  return shading == ParticleShading::kOptics ? "optics" : "weighted";
+}
+
 const char* to_string(StreakMode mode) { return mode == StreakMode::kAnalytic ? "analytic" : "time_samples"; }
 
 namespace {
@@ -313,14 +317,19 @@ bool add_splat(const RenderView& view, const RenderOptions& options, const Eigen
   return true;
 }
 
-void shade_splats(const EnvironmentLight& env, const FogState& fog, const ParticleAppearance& ap,
-                  SplatList* list) {
+void shade_splats(const EnvironmentLight& env, const ParticleRadianceGrid* optics, const FogState& fog,
+                  const ParticleAppearance& ap, SplatList* list) {
+  WGS_CHECK(ap.shading == ParticleShading::kWeighted || optics != nullptr || list->splats.empty());
   for (Splat& s : list->splats) {
     const int x = std::clamp(int(std::floor(s.mid_x)), 0, env.wide.width - 1);
     const int y = std::clamp(int(std::floor(s.mid_y)), 0, env.wide.height - 1);
     Eigen::Vector3f l;
-    for (int c = 0; c < 3; ++c)
-      l[c] = float(ap.environment_weight * env.wide.at(x, y, c) + ap.sky_weight * env.sky[c]);
+    if (ap.shading == ParticleShading::kOptics) {
+      l = optics->at(s.mid_x, s.mid_y);
+    } else {
+      for (int c = 0; c < 3; ++c)
+        l[c] = float(ap.environment_weight * env.wide.at(x, y, c) + ap.sky_weight * env.sky[c]);
+    }
     const float t = fog.transmittance(s.mid_ray_m);
     s.radiance = l * t + fog.airlight * (1.0f - t);
   }

@@ -23,6 +23,7 @@
 #include "core/camera.h"
 #include "core/thin_lens.h"
 #include "core/image.h"
+#include "generator/photometry.h"
 
 namespace weathergs {
 
@@ -50,10 +51,21 @@ struct RenderOptions {
 double visibility_distance_m(double f_px, double r_m, double a0, const RenderOptions& options);
 
 // Light of the particles (docs/generator.md, "Photometry").
+enum class ParticleShading {
+  kOptics,    // physical: the particle's optics over the light around it (generator/photometry.h)
+  kWeighted,  // paper style: weights of a wide blur of the view and of the sky radiance
+};
+const char* to_string(ParticleShading shading);
+
+// Albedo of fresh snow in the visible, ~0.9 (Warren 1982, Rev. Geophys. 20(1), Fig. 11: 0.9-0.99 for
+// pure fine-grained snow; 0.9 allows for the impurities of falling snow).
+constexpr double kSnowAlbedo = 0.9;
+
 struct ParticleAppearance {
-  // A drop images a ~165 degree cone (Garg & Nayar), much of it outside the frame and, outdoors,
-  // much of it sky: the image's neighborhood and the sky weigh about equally. Total 0.94: the
-  // drop transmits ~94% of what it refracts (Fresnel losses at two interfaces).
+  ParticleShading shading = ParticleShading::kOptics;
+  double albedo = kSnowAlbedo;  // kOptics, snow: Lambertian flakes
+  // kWeighted only: a drop images a ~165 degree cone (Garg & Nayar), much of it outside the frame
+  // and, outdoors, much of it sky: the image's neighborhood and the sky weigh about equally.
   double environment_weight = 0.54;  // x wide-cone average of the clean radiance around the particle
   double sky_weight = 0.4;           // x the sky radiance estimate (ambient from outside the image)
 };
@@ -115,10 +127,11 @@ struct ParticleRaster {
   std::vector<uint8_t> visible;  // per splat: reached the visibility cutoff in an unoccluded pixel
 };
 
-// Sets each splat's radiance: (environment_weight * wide(mid) + sky_weight * sky), seen through the
-// fog up to the particle: L t + airlight (1 - t), t = exp(-beta * ray length).
-void shade_splats(const EnvironmentLight& env, const FogState& fog, const ParticleAppearance& appearance,
-                  SplatList* splats);
+// Sets each splat's radiance at its middle: optics->at(mid) (kOptics; optics must be given) or
+// environment_weight * wide(mid) + sky_weight * sky (kWeighted), seen through the fog up to the
+// particle: L t + airlight (1 - t), t = exp(-beta * ray length).
+void shade_splats(const EnvironmentLight& env, const ParticleRadianceGrid* optics, const FogState& fog,
+                  const ParticleAppearance& appearance, SplatList* splats);
 
 // Rasterizes the splats (radiance already set) with the depth test; parallel over row bands,
 // deterministic for any thread count.

@@ -51,8 +51,8 @@ void FogStage::run(WeatherView& v) const {
 }
 
 ParticleStage::ParticleStage(const ParticleEffectSpec& effect, const RenderOptions& render, uint64_t seed,
-                             bool manifest)
-    : field_(effect.species, seed), appearance_(effect.appearance), render_(render), manifest_(manifest) {}
+                             bool manifest, std::optional<SunLight> sun)
+    : field_(effect.species, seed), appearance_(effect.appearance), render_(render), manifest_(manifest), sun_(sun) {}
 
 double relative_speed_bound_m_s(const ParticleField& field, int k) {
   const SizeClass& cls = field.classes()[size_t(k)];
@@ -234,13 +234,21 @@ void ParticleStage::run(WeatherView& v) const {
     generated += chunk_generated[size_t(c)];
     chunk_splats[size_t(c)] = SplatList();
   }
-  shade_splats(v.environment, v.fog, appearance_, &splats);
+  std::optional<ParticleRadianceGrid> optics;
+  if (appearance_.shading == ParticleShading::kOptics && !splats.splats.empty()) {
+    const ViewEnvironment environment(cam, v.clean, v.environment.sky);
+    optics.emplace(environment, cam,
+                   field_.options().species == Species::kRain ? ParticleOptics::kWaterSphere : ParticleOptics::kLambertSphere,
+                   appearance_.albedo, sun_ ? &*sun_ : nullptr);
+  }
+  shade_splats(v.environment, optics ? &*optics : nullptr, v.fog, appearance_, &splats);
   const ParticleRaster raster = rasterize_splats(view, splats, render_);
   composite_particles(raster, &v.radiance);
   for (size_t p = 0; p < raster.alpha.num_pixels(); ++p)
     v.particle_alpha.data[p] = 1.0f - (1.0f - v.particle_alpha.data[p]) * (1.0f - raster.alpha.data[p]);
   v.has_particles = true;
   v.layers[species + "_alpha"] = raster.alpha;
+  v.layers[species + "_radiance"] = raster.radiance;  // the float layer alpha (L - background) is made of
 
   int64_t visible = 0;
   for (uint8_t b : raster.visible) visible += b;

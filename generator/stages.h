@@ -72,7 +72,9 @@ class FogStage : public WeatherStage {
 // Writes layers/<species>_alpha and the manifest layers/particles_<species>/<view>.csv.
 class ParticleStage : public WeatherStage {
  public:
-  ParticleStage(const ParticleEffectSpec& effect, const RenderOptions& render, uint64_t seed, bool manifest);
+  // sun: lights the particles with the optics shading (lighting.sun of the spec), when given.
+  ParticleStage(const ParticleEffectSpec& effect, const RenderOptions& render, uint64_t seed, bool manifest,
+                std::optional<SunLight> sun = std::nullopt);
   std::string name() const override { return to_string(field_.options().species); }
   StageKind kind() const override { return StageKind::kParticles; }
   void run(WeatherView& view) const override;
@@ -83,6 +85,7 @@ class ParticleStage : public WeatherStage {
   ParticleAppearance appearance_;
   RenderOptions render_;
   bool manifest_;
+  std::optional<SunLight> sun_;
 };
 
 // The paper style's per-view 2D layer (generator/overlay.h): radiance = (1 - A) radiance +

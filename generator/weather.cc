@@ -39,8 +39,8 @@ std::vector<std::unique_ptr<WeatherStage>> make_stages(const WeatherSpec& spec, 
                                                        bool manifest, const Camera& reference) {
   std::vector<std::unique_ptr<WeatherStage>> stages;
   if (spec.fog) stages.push_back(std::make_unique<FogStage>(spec.fog->beta_per_m, airlight));
-  if (spec.rain) stages.push_back(std::make_unique<ParticleStage>(*spec.rain, spec.render, spec.seed, manifest));
-  if (spec.snow) stages.push_back(std::make_unique<ParticleStage>(*spec.snow, spec.render, spec.seed, manifest));
+  for (const auto* effect : {&spec.rain, &spec.snow})
+    if (*effect) stages.push_back(std::make_unique<ParticleStage>(**effect, spec.render, spec.seed, manifest, spec.sun));
   // The paper style's per-view 2D layers come after the world-space particles (the paper's OpenCV
   // step ran on the rendered images).
   for (const auto* effect : {&spec.rain, &spec.snow})

@@ -1,7 +1,9 @@
 #include "generator/weather_spec.h"
 
+#include <algorithm>
 #include <cmath>
 
+#include "core/constants.h"
 #include "core/error.h"
 #include "generator/physics.h"
 #include "generator/physics_constants.h"
@@ -48,7 +50,7 @@ ParticleEffectSpec parse_particles(const JsonReader& r, Species species, Weather
     o.d_max_mm = 5.0;
     o.opacity = 0.8;
     o.oblate = false;
-    e.appearance.environment_weight = 0.5;
+    e.appearance.environment_weight = 0.5;  // used with "shading": "weighted" only
     e.appearance.sky_weight = 0.7;
   }
   // A rate or a named intensity. Both only as in a resolved spec (dataset.json), where they must agree.
@@ -81,6 +83,7 @@ ParticleEffectSpec parse_particles(const JsonReader& r, Species species, Weather
     // Paper-style defaults (docs/generator.md, "Styles"): what explicit keys below may still override.
     o.size_scale = snow ? kPaperSnowSizeScale : kPaperRainSizeScale;
     o.opacity = snow ? kPaperSnowOpacity : kPaperRainOpacity;
+    e.appearance.shading = ParticleShading::kWeighted;
     e.appearance.environment_weight = snow ? 0.3 : 0.6;
     e.appearance.sky_weight = snow ? 1.2 : 0.8;
     e.overlay = OverlayOptions::defaults(species);
@@ -113,15 +116,44 @@ ParticleEffectSpec parse_particles(const JsonReader& r, Species species, Weather
   if (r.has("appearance")) {
     JsonReader a = r.child("appearance");
     if (!a.is_object()) throw InputError(a.where(), "expected an object");
-    e.appearance.environment_weight = a.get_or<double>("environment_weight", e.appearance.environment_weight);
-    e.appearance.sky_weight = a.get_or<double>("sky_weight", e.appearance.sky_weight);
+    // Weights without a shading name are the weighted model (the resolved specs written before
+    // "shading" existed say so).
+    const bool weights = a.has("environment_weight") || a.has("sky_weight");
+    if (a.has("shading"))
+      e.appearance.shading = a.get_enum("shading", {ParticleShading::kOptics, ParticleShading::kWeighted});
+    else if (weights)
+      e.appearance.shading = ParticleShading::kWeighted;
+    if (e.appearance.shading == ParticleShading::kWeighted) {
+      e.appearance.environment_weight = a.get_or<double>("environment_weight", e.appearance.environment_weight);
+      e.appearance.sky_weight = a.get_or<double>("sky_weight", e.appearance.sky_weight);
+      for (double w : {e.appearance.environment_weight, e.appearance.sky_weight})
+        if (!(w >= 0 && w <= 10)) throw InputError(a.where(), "appearance weights must be in [0, 10]");
+      if (a.has("albedo")) a.fail("albedo", "no albedo with \"shading\": \"weighted\" (it is for \"optics\")");
+    } else {
+      if (weights)
+        a.fail(a.has("sky_weight") ? "sky_weight" : "environment_weight",
+               "no weights with \"shading\": \"optics\" (they are for \"weighted\")");
+      if (a.has("albedo")) {
+        if (!snow) a.fail("albedo", "only snow has an albedo (rain drops are water spheres)");
+        e.appearance.albedo = a.get_number_or("albedo", e.appearance.albedo, 0, 1);
+      }
+    }
     a.finish();
-    for (double w : {e.appearance.environment_weight, e.appearance.sky_weight})
-      if (!(w >= 0 && w <= 10)) throw InputError(a.where(), "appearance weights must be in [0, 10]");
   }
   r.finish();
   o.validate(r.where());
   return e;
+}
+
+Json appearance_to_json(const ParticleAppearance& a, Species species) {
+  Json j = {{"shading", to_string(a.shading)}};
+  if (a.shading == ParticleShading::kWeighted) {
+    j["environment_weight"] = a.environment_weight;
+    j["sky_weight"] = a.sky_weight;
+  } else if (species == Species::kSnow) {
+    j["albedo"] = a.albedo;
+  }
+  return j;
 }
 
 Json particles_to_json(const ParticleEffectSpec& e) {
@@ -134,8 +166,7 @@ Json particles_to_json(const ParticleEffectSpec& e) {
             {"size_classes", o.size_classes},
             {"particles_per_cell", o.particles_per_cell},
             {"opacity", o.opacity},
-            {"appearance", {{"environment_weight", e.appearance.environment_weight},
-                            {"sky_weight", e.appearance.sky_weight}}}};
+            {"appearance", appearance_to_json(e.appearance, o.species)}};
   if (e.intensity) j["intensity"] = to_string(*e.intensity);
   if (o.size_scale != 1 || o.density_scale != 1 || e.overlay) {
     j["paper"] = {{"size_scale", o.size_scale}, {"density_scale", o.density_scale}};
@@ -206,7 +237,7 @@ Json WeatherSpec::to_json() const {
     effects["fog"] = f;
   }
   if (lens_droplets) effects["lens_droplets"] = lens::lens_droplet_spec_to_json(*lens_droplets);
-  return {{"seed", seed},
+  Json out = {{"seed", seed},
           {"style", to_string(style)},
           {"camera", cam},
           {"render",
@@ -218,6 +249,14 @@ Json WeatherSpec::to_json() const {
             {"near_m", render.near_m},
             {"defocus", render.defocus}}},
           {"effects", effects}};
+  if (sun) {
+    const Eigen::Vector3d& d = sun->to_sun_world;
+    out["lighting"] = {{"sun",
+                        {{"elevation_deg", std::asin(std::clamp(d.z(), -1.0, 1.0)) * 180 / kPi},
+                         {"azimuth_deg", std::atan2(d.x(), d.y()) * 180 / kPi},
+                         {"irradiance", {sun->irradiance[0], sun->irradiance[1], sun->irradiance[2]}}}}};
+  }
+  return out;
 }
 
 WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> style_override) {
@@ -270,6 +309,26 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
     spec.render.defocus = q.get_or<bool>("defocus", spec.render.defocus);
     q.finish();
     spec.render.validate(q.where());
+  }
+  if (r.has("lighting")) {
+    JsonReader l = r.child("lighting");
+    if (!l.is_object()) throw InputError(l.where(), "expected an object {\"sun\": {...}}");
+    if (l.has("sun")) {
+      JsonReader s = l.child("sun");
+      if (!s.is_object()) throw InputError(s.where(), "expected {elevation_deg, azimuth_deg, irradiance}");
+      for (const char* key : {"elevation_deg", "azimuth_deg", "irradiance"})
+        if (!s.has(key)) s.fail(key, "a required key of lighting.sun");
+      const double el = s.get_number_or("elevation_deg", 0, -90, 90) * kPi / 180;
+      const double az = s.get_number_or("azimuth_deg", 0, -360, 360) * kPi / 180;
+      const std::array<double, 3> e = s.get_array<3>("irradiance", 0, 1e4);
+      s.finish();
+      SunLight sun;
+      // Blender's convention (blender_scripts): azimuth from +y towards +x, elevation above the xy plane.
+      sun.to_sun_world = {std::cos(el) * std::sin(az), std::cos(el) * std::cos(az), std::sin(el)};
+      sun.irradiance = Eigen::Vector3f(float(e[0]), float(e[1]), float(e[2]));
+      spec.sun = sun;
+    }
+    l.finish();
   }
   JsonReader effects = r.child("effects");
   if (!effects.is_object()) throw InputError(effects.where(), "expected an object of effects");

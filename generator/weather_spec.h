@@ -58,6 +58,8 @@ struct WeatherSpec {
   RenderOptions render;
   std::optional<ParticleEffectSpec> rain, snow;
   std::optional<FogSpec> fog;
+  // lighting.sun: the scene's sun, lighting the particles (generate fills it from the scene's lights).
+  std::optional<SunLight> sun;
   // Lens droplets (effects.lens_droplets), parsed by generator/lens (docs/lens_droplets.md);
   // run_weather resolves the window pose against the first camera.
   std::optional<lens::LensDropletSpec> lens_droplets;

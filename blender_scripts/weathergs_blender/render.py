@@ -74,9 +74,16 @@ def setup_render(render, out_dir, depth_dir):
     scene.render.resolution_x = render["width"]
     scene.render.resolution_y = render["height"]
     scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
-    scene.render.image_settings.color_depth = "8"
+    if render.get("float_images", False):
+        # Scene-linear float32 (validation against the C++ layers below 8-bit quantization).
+        scene.render.image_settings.file_format = "OPEN_EXR"
+        scene.render.image_settings.color_mode = "RGB"
+        scene.render.image_settings.color_depth = "32"
+        scene.render.image_settings.exr_codec = "ZIP"
+    else:
+        scene.render.image_settings.file_format = "PNG"
+        scene.render.image_settings.color_mode = "RGB"
+        scene.render.image_settings.color_depth = "8"
     scene.render.dither_intensity = 0.0  # dithering is noise: keep renders of one view identical
     scene.view_settings.view_transform = "Standard"
     scene.view_settings.look = "None"
@@ -145,7 +152,8 @@ def add_markers(markers):
 
 def add_particles(particles):
     """Airborne particles for the path-tracer validation only (docs/scenes.md): rain drops as water
-    spheres (glass, IOR 1.333), snow flakes as translucent white spheres, each moving linearly from
+    spheres (glass, IOR 1.333), snow flakes as Lambertian spheres (particles["snow"]: albedo,
+    opacity), each moving linearly from
     p_world (shutter open) by v_world * exposure_s, rendered with Cycles motion blur. Returns the
     collection (hidden per view with "particles": false)."""
     coll = bpy.data.collections.new("particles")
@@ -159,18 +167,22 @@ def add_particles(particles):
     glass.inputs["Roughness"].default_value = 0.0
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(glass.outputs[0], out.inputs["Surface"])
+    # Snow: the generator's flake, a Lambertian sphere of the spec's albedo that covers `opacity` of
+    # its disk (the rest transparent).
+    snow = particles.get("snow", {"albedo": 0.9, "opacity": 1.0})
     flake = bpy.data.materials.new("snow_flake")
     flake.use_nodes = True
     nt = flake.node_tree
     nt.nodes.clear()
     diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Color"].default_value = (0.9, 0.9, 0.92, 1.0)
-    trans = nt.nodes.new("ShaderNodeBsdfTranslucent")
-    trans.inputs["Color"].default_value = (0.9, 0.9, 0.92, 1.0)
+    a = snow["albedo"]
+    diffuse.inputs["Color"].default_value = (a, a, a, 1.0)
+    diffuse.inputs["Roughness"].default_value = 0.0
+    clear = nt.nodes.new("ShaderNodeBsdfTransparent")
     mix = nt.nodes.new("ShaderNodeMixShader")
-    mix.inputs["Fac"].default_value = 0.5
-    nt.links.new(diffuse.outputs[0], mix.inputs[1])
-    nt.links.new(trans.outputs[0], mix.inputs[2])
+    mix.inputs["Fac"].default_value = snow["opacity"]
+    nt.links.new(clear.outputs[0], mix.inputs[1])
+    nt.links.new(diffuse.outputs[0], mix.inputs[2])
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(mix.outputs[0], out.inputs["Surface"])
     meshes = {}

@@ -1,0 +1,317 @@
+#include "datagen/cycles_validation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+
+#include "core/atomic_file.h"
+#include "core/dataset.h"
+#include "core/error.h"
+#include "core/image.h"
+#include "core/thin_lens.h"
+#include "datagen/blender.h"
+#include "datagen/process.h"
+#include "datagen/scene_spec.h"
+
+namespace weathergs::datagen {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+
+struct ManifestParticle {
+  std::string kind;
+  double radius_m = 0, camera_z_m = 0;
+  Eigen::Vector3d p_world, v_world;
+};
+
+std::vector<ManifestParticle> read_particles(const std::string& csv, const std::string& kind) {
+  std::ifstream in(csv);
+  if (!in) throw InputError(csv, "particle manifest not found (generate with manifests on)");
+  std::string line;
+  std::getline(in, line);  // header: id,diameter_mm,visual_diameter_mm,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,camera_z_m,visible
+  std::vector<ManifestParticle> items;
+  int n = 1;
+  while (std::getline(in, line)) {
+    ++n;
+    std::stringstream s(line);
+    std::string f;
+    std::vector<std::string> cols;
+    while (std::getline(s, f, ',')) cols.push_back(f);
+    if (cols.size() != 11) throw InputError(csv + ":" + std::to_string(n), "expected 11 columns");
+    ManifestParticle p;
+    p.kind = kind;
+    p.radius_m = 0.5e-3 * std::stod(cols[2]);  // visual diameter
+    p.p_world = {std::stod(cols[3]), std::stod(cols[4]), std::stod(cols[5])};
+    p.v_world = {std::stod(cols[6]), std::stod(cols[7]), std::stod(cols[8])};
+    p.camera_z_m = std::stod(cols[9]);
+    items.push_back(p);
+  }
+  return items;
+}
+
+double psnr_of(double mse) { return mse > 0 ? 10.0 * std::log10(1.0 / mse) : 99.0; }
+
+// layer = a - b, 3 channels.
+Image difference(const Image& a, const Image& b) {
+  Image out(a.width, a.height, 3, ColorSpace::kLinear);
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x)
+      for (int c = 0; c < 3; ++c) out.at(x, y, c) = a.at(x, y, c) - b.at(x, y, c);
+  return out;
+}
+
+// 4x4 box average: Monte Carlo noise of the thin motion-blurred streaks drops ~4x in amplitude, the
+// structure (where the weather adds or takes light, how much) stays.
+Image box4(const Image& a) {
+  Image out(a.width / 4, a.height / 4, 3, ColorSpace::kLinear);
+  for (int y = 0; y < out.height; ++y)
+    for (int x = 0; x < out.width; ++x)
+      for (int c = 0; c < 3; ++c) {
+        double sum = 0;
+        for (int dy = 0; dy < 4; ++dy)
+          for (int dx = 0; dx < 4; ++dx) sum += a.at(4 * x + dx, 4 * y + dy, c);
+        out.at(x, y, c) = float(sum / 16.0);
+      }
+  return out;
+}
+
+double mse_of(const Image& a, const Image* b) {
+  double sum = 0;
+  for (size_t i = 0; i < a.data.size(); ++i) {
+    const double d = a.data[i] - (b ? b->data[i] : 0.f);
+    sum += d * d;
+  }
+  return sum / double(a.data.size());
+}
+
+// Where along a particle's projected path its streak lies: the path parameters below which 10% and
+// 90% of the layer's |value| inside a capsule around the path lie, in pixels from the path's start.
+// Robust to Monte Carlo noise (a quantile of the whole streak, not a threshold per pixel).
+struct Extent {
+  double start_px = 0, end_px = 0;
+  bool found = false;
+};
+Extent streak_extent(const Image& layer, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double capsule_px) {
+  const Eigen::Vector2d d = b - a;
+  const double len2 = std::max(d.squaredNorm(), 1e-12), len = std::sqrt(len2);
+  std::vector<std::pair<double, double>> mass;  // (t, |layer|)
+  const int x0 = std::max(0, int(std::floor(std::min(a.x(), b.x()) - capsule_px)));
+  const int x1 = std::min(layer.width - 1, int(std::ceil(std::max(a.x(), b.x()) + capsule_px)));
+  const int y0 = std::max(0, int(std::floor(std::min(a.y(), b.y()) - capsule_px)));
+  const int y1 = std::min(layer.height - 1, int(std::ceil(std::max(a.y(), b.y()) + capsule_px)));
+  double total = 0;
+  for (int y = y0; y <= y1; ++y)
+    for (int x = x0; x <= x1; ++x) {
+      const Eigen::Vector2d q(x + 0.5, y + 0.5);
+      const double t = std::clamp((q - a).dot(d) / len2, 0.0, 1.0);
+      if ((q - a - t * d).norm() > capsule_px) continue;
+      double m = 0;
+      for (int c = 0; c < 3; ++c) m += std::abs(layer.at(x, y, c));
+      if (m > 0) mass.push_back({t, m}), total += m;
+    }
+  Extent e;
+  if (!(total > 0)) return e;
+  std::sort(mass.begin(), mass.end());
+  double acc = 0;
+  bool have_start = false;
+  for (const auto& [t, m] : mass) {
+    acc += m;
+    if (!have_start && acc >= 0.1 * total) e.start_px = t * len, have_start = true;
+    if (acc >= 0.9 * total) {
+      e.end_px = t * len;
+      break;
+    }
+  }
+  e.found = true;
+  return e;
+}
+
+}  // namespace
+
+void CyclesValidationOptions::validate() const {
+  if (dataset.empty()) throw InputError("dataset", "required");
+  if (blender_script.empty()) throw InputError("blender_script", "required (blender_scripts/render_scene.py)");
+  if (samples < 1) throw InputError("samples", "expected >= 1, got " + std::to_string(samples));
+  if (nearest < 1) throw InputError("nearest", "expected >= 1, got " + std::to_string(nearest));
+}
+
+Json validate_against_cycles(const CyclesValidationOptions& o) {
+  o.validate();
+  const Dataset ds = read_dataset(o.dataset);
+  if (!ds.info.generator) throw InputError(o.dataset + "/dataset.json", "no generator block: not a generated dataset");
+  const Json& gen = *ds.info.generator;
+  for (const auto& [effect, body] : gen.at("spec").at("effects").items())
+    if (effect != "rain" && effect != "snow")
+      throw InputError(o.dataset + "/dataset.json",
+                       "the validation compares the particle layer alone, but the spec has \"" + effect +
+                           "\" (make the dataset with rain and/or snow only)");
+  const SceneSpec scene = read_scene_spec(o.scene_spec.empty() ? gen.at("scene_spec").get<std::string>() : o.scene_spec);
+  const VariantSpec variant = scene.variant(gen.at("variant").get<std::string>());
+  ProfileSpec profile = scene.profile(gen.at("profile").get<std::string>());
+  profile.engine = "cycles";
+  profile.samples = o.samples;
+  Camera cam = ds.camera(o.view);
+
+  std::vector<ManifestParticle> particles;
+  std::vector<std::string> species_present;
+  Json items = Json::array();
+  double weather_seconds = 0;
+  for (const char* species : {"rain", "snow"}) {
+    const std::string csv = ds.root + "/layers/particles_" + species + "/" + o.view + ".csv";
+    if (!fs::exists(csv)) continue;
+    species_present.push_back(species);
+    for (const ManifestParticle& p : read_particles(csv, species)) {
+      particles.push_back(p);
+      items.push_back({{"kind", p.kind},
+                       {"radius_m", p.radius_m},
+                       {"p_world", {p.p_world.x(), p.p_world.y(), p.p_world.z()}},
+                       {"v_world", {p.v_world.x(), p.v_world.y(), p.v_world.z()}}});
+    }
+    // The latest run of the stage (a dataset re-weathered by `weathergs weather` lists earlier runs too).
+    double last = 0;
+    for (const auto& st : gen.at("stages"))
+      if (st.value("name", "") == species) last = st.value("seconds", 0.0);
+    weather_seconds += last;
+  }
+  if (items.empty()) throw InputError(o.dataset, "no particles in the manifests of view " + o.view);
+
+  // The third render repeats the weather view with another sampling seed: the PSNR between the two
+  // Cycles layers is the Monte Carlo noise floor of the reference itself.
+  Camera plain = cam, weather = cam, plain2 = cam, weather2 = cam;
+  plain.name = o.view + "_plain";
+  weather.name = o.view + "_weather";
+  plain2.name = o.view + "_plain_seed2";
+  weather2.name = o.view + "_weather_seed2";
+  fs::create_directories(o.out_dir);
+  const std::string raw = fs::absolute(o.out_dir).string() + "/render";
+  fs::remove_all(raw);
+  fs::create_directories(raw);
+  Json job = blender_job(scene, variant, profile, {plain, weather, plain2, weather2}, {});
+  for (int i = 0; i < 4; ++i) {
+    job["camera"]["views"][i]["particles"] = i % 2 == 1;
+    job["camera"]["views"][i]["seed"] = i < 2 ? 0 : 1;
+  }
+  job["particles"] = {{"exposure_s", cam.exposure_s}, {"items", items}};
+  if (gen.at("spec").at("effects").contains("snow")) {
+    const Json& snow = gen.at("spec").at("effects").at("snow");
+    job["particles"]["snow"] = {{"albedo", snow.at("appearance").value("albedo", 0.9)},
+                                {"opacity", snow.value("opacity", 1.0)}};
+  }
+  job["render"]["float_images"] = true;
+  // The generator defocuses particles through the camera's lens when the spec says so: so does Cycles.
+  const bool defocus = gen.at("spec").at("render").value("defocus", false) && cam.f_number && cam.focus_distance_m;
+  if (defocus) job["camera"]["dof"] = {{"focus_distance_m", *cam.focus_distance_m}, {"f_number", *cam.f_number}};
+  job["output_dir"] = raw;
+  const std::string job_path = fs::absolute(o.out_dir).string() + "/job.json";
+  write_file_atomic(job_path, job.dump(1));
+  ProcessOptions popts;
+  popts.log_path = fs::absolute(o.out_dir).string() + "/blender.log";
+  fs::remove(popts.log_path);
+  const ProcessResult r = run_process({o.blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+                                       o.blender_script, "--", job_path},
+                                      "blender", popts);
+  if (r.exit_code != 0) throw InputError("blender", "failed:\n" + tail_of_file(popts.log_path));
+  const Json log = read_json_file(raw + "/render_log.json");
+  const double cycles_plain_s = log["view_seconds"][0].get<double>();
+  const double cycles_weather_s = log["view_seconds"][1].get<double>();
+
+  auto cycles = [&](const Camera& c) { return read_image(raw + "/clean/" + c.name + ".exr"); };
+  const Image lc = difference(cycles(weather), cycles(plain));
+  const Image lc2 = difference(cycles(weather2), cycles(plain2));
+  // The C++ layer in float: the stages' compositing, (1 - A) below + A L per species in stage order,
+  // replayed from the float layers on the clean view. (The 8-bit images would quantize the faint
+  // physical streaks away.)
+  const Image clean = to_linear(to_rgb(read_image(ds.path(ImageKind::kClean, o.view))));
+  Image composite = clean;
+  for (const std::string& species : species_present) {
+    const Image alpha = read_image(ds.root + "/layers/" + species + "_alpha/" + o.view + ".exr");
+    const Image light = read_image(ds.root + "/layers/" + species + "_radiance/" + o.view + ".exr");
+    for (size_t p = 0; p < composite.num_pixels(); ++p)
+      for (int c = 0; c < 3; ++c) {
+        float& v = composite.data[p * 3 + c];
+        v = (1 - alpha.data[p]) * v + alpha.data[p] * light.data[p * 3 + c];
+      }
+  }
+  const Image lp = difference(composite, clean);
+
+  const Image bc = box4(lc), bc2 = box4(lc2), bp = box4(lp);
+  // Energy: RMS of the 4x4-averaged layer; Cycles' corrected for its noise (the seed-vs-seed MSE is
+  // twice the noise variance of one render).
+  const double noise_var_box = mse_of(bc, &bc2) / 2;
+  const double energy_cycles = std::sqrt(std::max(0.0, mse_of(bc, nullptr) - noise_var_box));
+  const double energy_cpp = std::sqrt(mse_of(bp, nullptr));
+  double mean_cyc = 0, mean_cpp = 0;
+  for (size_t i = 0; i < lc.data.size(); ++i) mean_cyc += lc.data[i], mean_cpp += lp.data[i];
+  mean_cyc /= double(lc.data.size()), mean_cpp /= double(lc.data.size());
+
+  // Streak extents of the nearest particles whose shutter-open position is in front of the camera.
+  std::vector<const ManifestParticle*> order;
+  for (const ManifestParticle& p : particles) order.push_back(&p);
+  std::sort(order.begin(), order.end(), [](auto* x, auto* y) { return x->camera_z_m < y->camera_z_m; });
+  const std::optional<ThinLens> lens = defocus ? thin_lens_of(cam) : std::nullopt;
+  Json streaks = Json::array();
+  std::vector<double> end_errors;
+  for (const ManifestParticle* p : order) {
+    if (int(streaks.size()) >= o.nearest) break;
+    const Eigen::Vector3d c0 = cam.to_camera(p->p_world), c1 = cam.to_camera(p->p_world + p->v_world * cam.exposure_s);
+    if (!(c0.z() > 0.05 && c1.z() > 0.05)) continue;
+    const Eigen::Vector2d u0 = cam.project_camera(c0), u1 = cam.project_camera(c1);
+    // Both ends inside the image: an extent cut by the frame says nothing about the renderer.
+    auto inside = [&](const Eigen::Vector2d& u) { return u.x() >= 0 && u.y() >= 0 && u.x() < cam.width && u.y() < cam.height; };
+    if (!inside(u0) || !inside(u1)) continue;
+    const double f = std::sqrt(cam.fx * cam.fy), z = 0.5 * (c0.z() + c1.z());
+    const double r_px = f * p->radius_m / z, coc = lens ? lens->coc_radius_px(f, z) : 0.0;
+    const double capsule = 1.5 + std::sqrt(r_px * r_px + coc * coc);
+    const Extent ec = streak_extent(lc, u0, u1, capsule), ep = streak_extent(lp, u0, u1, capsule);
+    if (!ec.found || !ep.found) continue;
+    const double err = std::max(std::abs(ec.start_px - ep.start_px), std::abs(ec.end_px - ep.end_px));
+    end_errors.push_back(err);
+    streaks.push_back({{"kind", p->kind},
+                       {"camera_z_m", p->camera_z_m},
+                       {"path_px", (u1 - u0).norm()},
+                       {"cycles_px", {ec.start_px, ec.end_px}},
+                       {"cpp_px", {ep.start_px, ep.end_px}},
+                       {"max_end_error_px", err}});
+  }
+  std::vector<double> sorted = end_errors;
+  std::sort(sorted.begin(), sorted.end());
+  const double median_err = sorted.empty() ? 0 : sorted[sorted.size() / 2];
+  const double max_err = sorted.empty() ? 0 : sorted.back();
+
+  const double cpp_per_view_s = weather_seconds / double(ds.cameras.size());
+  const double psnr_box = psnr_of(mse_of(bc, &bp)), psnr_box_zero = psnr_of(mse_of(bc, nullptr));
+  const Json result = {{"dataset", ds.info.name},
+                       {"view", o.view},
+                       {"particles", items.size()},
+                       {"cycles_samples", o.samples},
+                       {"depth_of_field", defocus},
+                       {"psnr_weather_layer_db", psnr_of(mse_of(lc, &lp))},
+                       {"psnr_no_weather_baseline_db", psnr_of(mse_of(lc, nullptr))},
+                       {"psnr_cycles_seed_vs_seed_db", psnr_of(mse_of(lc, &lc2))},
+                       {"psnr_weather_layer_box4_db", psnr_box},
+                       {"psnr_no_weather_baseline_box4_db", psnr_box_zero},
+                       {"psnr_cycles_seed_vs_seed_box4_db", psnr_of(mse_of(bc, &bc2))},
+                       {"gain_over_no_weather_box4_db", psnr_box - psnr_box_zero},
+                       {"mean_layer_cycles", mean_cyc},
+                       {"mean_layer_cpp", mean_cpp},
+                       {"energy_box4_cycles", energy_cycles},
+                       {"energy_box4_cpp", energy_cpp},
+                       {"energy_ratio_cpp_over_cycles", energy_cycles > 0 ? energy_cpp / energy_cycles : 0.0},
+                       {"streaks_compared", streaks.size()},
+                       {"streak_end_error_median_px", median_err},
+                       {"streak_end_error_max_px", max_err},
+                       {"streaks", streaks},
+                       {"cycles_seconds_with_particles", cycles_weather_s},
+                       {"cycles_seconds_plain", cycles_plain_s},
+                       {"cpp_weather_seconds_per_view", cpp_per_view_s},
+                       {"time_ratio_cycles_over_cpp", cycles_weather_s / std::max(cpp_per_view_s, 1e-9)}};
+  write_file_atomic(o.out_dir + "/result.json", result.dump(1));
+  return result;
+}
+
+}  // namespace weathergs::datagen

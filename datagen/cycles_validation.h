@@ -1,0 +1,40 @@
+// Path-tracer validation of the weather compositor (issues 5 and 10 §1; benchmarks/README.md,
+// "Path-tracer validation").
+//
+// A dataset made by `weathergs generate` or `weathergs weather` with rain and/or snow only, with the
+// generator's particle manifests and float layers: the view's particles (position at shutter open,
+// velocity, visual diameter) go to Blender as water spheres (rain) or Lambertian flakes of the spec's
+// albedo and opacity (snow), moving linearly over the exposure; Cycles renders the variant's scene with
+// and without them (same sampling seed, so the noise of paths that miss every particle cancels), with
+// motion blur, float output, and depth of field when the generator defocuses. A third and fourth
+// render repeat the pair with another seed: the reference's own noise floor. The weather layers
+// weathered - clean (linear RGB, float on both sides) are compared.
+#pragma once
+
+#include <string>
+
+#include "core/json_reader.h"
+
+namespace weathergs::datagen {
+
+struct CyclesValidationOptions {
+  std::string dataset;            // required
+  std::string view = "001";
+  int samples = 256;              // Cycles samples per pixel
+  int nearest = 20;               // particles whose streak extents are compared
+  std::string out_dir = "cycles_validation";  // job, Blender log, renders, result.json
+  std::string blender = "blender";
+  std::string blender_script;     // blender_scripts/render_scene.py (required)
+  std::string scene_spec;         // default: the dataset's generator.scene_spec (relative to the cwd)
+  void validate() const;          // InputError naming the field
+};
+
+// Runs Cycles and compares; returns (and writes to out_dir/result.json) the figures:
+// psnr_weather_layer[_box4]_db, psnr_no_weather_baseline[_box4]_db, psnr_cycles_seed_vs_seed[_box4]_db,
+// gain_over_no_weather_box4_db, energy_box4_{cycles,cpp} (RMS of the 4x4-averaged layer; Cycles' with
+// its noise variance removed), energy_ratio_cpp_over_cycles, mean_layer_{cycles,cpp},
+// streak_end_error_{median,max}_px over `streaks` (10%/90% quantiles of each streak's |layer| along
+// its projected path), the seconds of both renderers and their ratio.
+Json validate_against_cycles(const CyclesValidationOptions& options);
+
+}  // namespace weathergs::datagen
