@@ -1,7 +1,7 @@
 // Path-tracer validation of the weather compositor: datagen/cycles_validation.h does the work.
 //
 //   bench_datagen_cycles_validation --dataset DIR [--view 001] [--samples 256] [--nearest 20] [--out DIR]
-//                                   [--blender blender]
+//                                   [--blender blender] [--reuse-renders]
 #include <cstdio>
 #include <string>
 
@@ -26,7 +26,8 @@ int main(int argc, char** argv) {
       else if (k == "--samples") o.samples = std::stoi(next());
       else if (k == "--nearest") o.nearest = std::stoi(next());
       else if (k == "--blender") o.blender = next();
-      else throw InputError(k, "unknown option (expected --dataset, --view, --samples, --nearest, --out, --blender)");
+      else if (k == "--reuse-renders") o.reuse_renders = true;
+      else throw InputError(k, "unknown option (expected --dataset, --view, --samples, --nearest, --out, --blender, --reuse-renders)");
     }
     Json result = datagen::validate_against_cycles(o);
     result.erase("streaks");

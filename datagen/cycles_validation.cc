@@ -89,34 +89,52 @@ double mse_of(const Image& a, const Image* b) {
   return sum / double(a.data.size());
 }
 
-// Where along a particle's projected path its streak lies: the path parameters below which 10% and
-// 90% of the layer's |value| inside a capsule around the path lie, in pixels from the path's start.
-// Robust to Monte Carlo noise (a quantile of the whole streak, not a threshold per pixel).
+// A particle's projected linear path over the exposure and the capsule around it that holds its streak
+// (its image radius, defocus and 1.5 px of pixel footprint).
+struct Capsule {
+  Eigen::Vector2d a, b;
+  double radius_px = 0;
+  bool contains(const Eigen::Vector2d& q, double* t) const {
+    const Eigen::Vector2d d = b - a;
+    *t = std::clamp((q - a).dot(d) / std::max(d.squaredNorm(), 1e-12), 0.0, 1.0);
+    return (q - a - *t * d).norm() <= radius_px;
+  }
+  // Pixels of the image whose centre is inside, in row-major order.
+  template <class F>
+  void for_each_pixel(int width, int height, F&& f) const {
+    const int x0 = std::max(0, int(std::floor(std::min(a.x(), b.x()) - radius_px)));
+    const int x1 = std::min(width - 1, int(std::ceil(std::max(a.x(), b.x()) + radius_px)));
+    const int y0 = std::max(0, int(std::floor(std::min(a.y(), b.y()) - radius_px)));
+    const int y1 = std::min(height - 1, int(std::ceil(std::max(a.y(), b.y()) + radius_px)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        double t;
+        if (contains({x + 0.5, y + 0.5}, &t)) f(x, y, t);
+      }
+  }
+};
+
+// Where along the path the streak lies: the path parameters below which 10% and 90% of the layer's
+// |value| inside the capsule lie, in pixels from the path's start, over the pixels no other
+// particle's capsule touches (`shared` counts capsules per pixel). Robust to Monte Carlo noise (a
+// quantile of the whole streak, not a threshold per pixel).
 struct Extent {
   double start_px = 0, end_px = 0;
   bool found = false;
 };
-Extent streak_extent(const Image& layer, const Eigen::Vector2d& a, const Eigen::Vector2d& b, double capsule_px) {
-  const Eigen::Vector2d d = b - a;
-  const double len2 = std::max(d.squaredNorm(), 1e-12), len = std::sqrt(len2);
+Extent streak_extent(const Image& layer, const Capsule& c, const std::vector<int>& shared) {
   std::vector<std::pair<double, double>> mass;  // (t, |layer|)
-  const int x0 = std::max(0, int(std::floor(std::min(a.x(), b.x()) - capsule_px)));
-  const int x1 = std::min(layer.width - 1, int(std::ceil(std::max(a.x(), b.x()) + capsule_px)));
-  const int y0 = std::max(0, int(std::floor(std::min(a.y(), b.y()) - capsule_px)));
-  const int y1 = std::min(layer.height - 1, int(std::ceil(std::max(a.y(), b.y()) + capsule_px)));
   double total = 0;
-  for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) {
-      const Eigen::Vector2d q(x + 0.5, y + 0.5);
-      const double t = std::clamp((q - a).dot(d) / len2, 0.0, 1.0);
-      if ((q - a - t * d).norm() > capsule_px) continue;
-      double m = 0;
-      for (int c = 0; c < 3; ++c) m += std::abs(layer.at(x, y, c));
-      if (m > 0) mass.push_back({t, m}), total += m;
-    }
+  c.for_each_pixel(layer.width, layer.height, [&](int x, int y, double t) {
+    if (shared[size_t(y) * layer.width + x] != 1) return;
+    double m = 0;
+    for (int ch = 0; ch < 3; ++ch) m += std::abs(layer.at(x, y, ch));
+    if (m > 0) mass.push_back({t, m}), total += m;
+  });
   Extent e;
   if (!(total > 0)) return e;
   std::sort(mass.begin(), mass.end());
+  const double len = (c.b - c.a).norm();
   double acc = 0;
   bool have_start = false;
   for (const auto& [t, m] : mass) {
@@ -189,8 +207,6 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   weather2.name = o.view + "_weather_seed2";
   fs::create_directories(o.out_dir);
   const std::string raw = fs::absolute(o.out_dir).string() + "/render";
-  fs::remove_all(raw);
-  fs::create_directories(raw);
   Json job = blender_job(scene, variant, profile, {plain, weather, plain2, weather2}, {});
   for (int i = 0; i < 4; ++i) {
     job["camera"]["views"][i]["particles"] = i % 2 == 1;
@@ -208,14 +224,23 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   if (defocus) job["camera"]["dof"] = {{"focus_distance_m", *cam.focus_distance_m}, {"f_number", *cam.f_number}};
   job["output_dir"] = raw;
   const std::string job_path = fs::absolute(o.out_dir).string() + "/job.json";
-  write_file_atomic(job_path, job.dump(1));
-  ProcessOptions popts;
-  popts.log_path = fs::absolute(o.out_dir).string() + "/blender.log";
-  fs::remove(popts.log_path);
-  const ProcessResult r = run_process({o.blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-                                       o.blender_script, "--", job_path},
-                                      "blender", popts);
-  if (r.exit_code != 0) throw InputError("blender", "failed:\n" + tail_of_file(popts.log_path));
+  // Renders of the same job (same particles, scene, samples) are reused when asked: the comparison
+  // can change without re-running Cycles. render_log.json is written last, so its presence means
+  // the renders are complete.
+  const bool reuse = o.reuse_renders && fs::exists(raw + "/render_log.json") && fs::exists(job_path) &&
+                     read_json_file(job_path) == job;
+  if (!reuse) {
+    fs::remove_all(raw);
+    fs::create_directories(raw);
+    write_file_atomic(job_path, job.dump(1));
+    ProcessOptions popts;
+    popts.log_path = fs::absolute(o.out_dir).string() + "/blender.log";
+    fs::remove(popts.log_path);
+    const ProcessResult r = run_process({o.blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+                                         o.blender_script, "--", job_path},
+                                        "blender", popts);
+    if (r.exit_code != 0) throw InputError("blender", "failed:\n" + tail_of_file(popts.log_path));
+  }
   const Json log = read_json_file(raw + "/render_log.json");
   const double cycles_plain_s = log["view_seconds"][0].get<double>();
   const double cycles_weather_s = log["view_seconds"][1].get<double>();
@@ -249,31 +274,43 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   for (size_t i = 0; i < lc.data.size(); ++i) mean_cyc += lc.data[i], mean_cpp += lp.data[i];
   mean_cyc /= double(lc.data.size()), mean_cpp /= double(lc.data.size());
 
-  // Streak extents of the nearest particles whose shutter-open position is in front of the camera.
-  std::vector<const ManifestParticle*> order;
-  for (const ManifestParticle& p : particles) order.push_back(&p);
-  std::sort(order.begin(), order.end(), [](auto* x, auto* y) { return x->camera_z_m < y->camera_z_m; });
+  // Streak extents of the nearest particles whose paths lie inside the image (an extent cut by the
+  // frame says nothing about the renderer) and mostly clear of other particles' streaks.
   const std::optional<ThinLens> lens = defocus ? thin_lens_of(cam) : std::nullopt;
+  const double f = std::sqrt(cam.fx * cam.fy);
+  std::vector<std::optional<Capsule>> capsules(particles.size());
+  std::vector<int> shared(size_t(cam.width) * cam.height, 0);
+  for (size_t i = 0; i < particles.size(); ++i) {
+    const ManifestParticle& p = particles[i];
+    const Eigen::Vector3d c0 = cam.to_camera(p.p_world), c1 = cam.to_camera(p.p_world + p.v_world * cam.exposure_s);
+    if (!(c0.z() > 0.05 && c1.z() > 0.05)) continue;
+    const double z = 0.5 * (c0.z() + c1.z()), r_px = f * p.radius_m / z, coc = lens ? lens->coc_radius_px(f, z) : 0.0;
+    capsules[i] = Capsule{cam.project_camera(c0), cam.project_camera(c1), 1.5 + std::sqrt(r_px * r_px + coc * coc)};
+    capsules[i]->for_each_pixel(cam.width, cam.height, [&](int x, int y, double) { ++shared[size_t(y) * cam.width + x]; });
+  }
+  std::vector<size_t> order(particles.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t x, size_t y) { return particles[x].camera_z_m < particles[y].camera_z_m; });
   Json streaks = Json::array();
   std::vector<double> end_errors;
-  for (const ManifestParticle* p : order) {
+  auto inside = [&](const Eigen::Vector2d& u) { return u.x() >= 0 && u.y() >= 0 && u.x() < cam.width && u.y() < cam.height; };
+  for (size_t i : order) {
     if (int(streaks.size()) >= o.nearest) break;
-    const Eigen::Vector3d c0 = cam.to_camera(p->p_world), c1 = cam.to_camera(p->p_world + p->v_world * cam.exposure_s);
-    if (!(c0.z() > 0.05 && c1.z() > 0.05)) continue;
-    const Eigen::Vector2d u0 = cam.project_camera(c0), u1 = cam.project_camera(c1);
-    // Both ends inside the image: an extent cut by the frame says nothing about the renderer.
-    auto inside = [&](const Eigen::Vector2d& u) { return u.x() >= 0 && u.y() >= 0 && u.x() < cam.width && u.y() < cam.height; };
-    if (!inside(u0) || !inside(u1)) continue;
-    const double f = std::sqrt(cam.fx * cam.fy), z = 0.5 * (c0.z() + c1.z());
-    const double r_px = f * p->radius_m / z, coc = lens ? lens->coc_radius_px(f, z) : 0.0;
-    const double capsule = 1.5 + std::sqrt(r_px * r_px + coc * coc);
-    const Extent ec = streak_extent(lc, u0, u1, capsule), ep = streak_extent(lp, u0, u1, capsule);
+    if (!capsules[i] || !inside(capsules[i]->a) || !inside(capsules[i]->b)) continue;
+    int own = 0, all = 0;
+    capsules[i]->for_each_pixel(cam.width, cam.height, [&](int x, int y, double) {
+      ++all;
+      own += shared[size_t(y) * cam.width + x] == 1;
+    });
+    if (2 * own < all) continue;  // more than half of it under other streaks
+    const Extent ec = streak_extent(lc, *capsules[i], shared), ep = streak_extent(lp, *capsules[i], shared);
     if (!ec.found || !ep.found) continue;
     const double err = std::max(std::abs(ec.start_px - ep.start_px), std::abs(ec.end_px - ep.end_px));
     end_errors.push_back(err);
-    streaks.push_back({{"kind", p->kind},
-                       {"camera_z_m", p->camera_z_m},
-                       {"path_px", (u1 - u0).norm()},
+    streaks.push_back({{"kind", particles[i].kind},
+                       {"camera_z_m", particles[i].camera_z_m},
+                       {"path_px", (capsules[i]->b - capsules[i]->a).norm()},
                        {"cycles_px", {ec.start_px, ec.end_px}},
                        {"cpp_px", {ep.start_px, ep.end_px}},
                        {"max_end_error_px", err}});

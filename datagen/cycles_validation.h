@@ -26,6 +26,7 @@ struct CyclesValidationOptions {
   std::string blender = "blender";
   std::string blender_script;     // blender_scripts/render_scene.py (required)
   std::string scene_spec;         // default: the dataset's generator.scene_spec (relative to the cwd)
+  bool reuse_renders = false;     // keep out_dir's Cycles renders when they were made from the same job
   void validate() const;          // InputError naming the field
 };
 
@@ -34,7 +35,8 @@ struct CyclesValidationOptions {
 // gain_over_no_weather_box4_db, energy_box4_{cycles,cpp} (RMS of the 4x4-averaged layer; Cycles' with
 // its noise variance removed), energy_ratio_cpp_over_cycles, mean_layer_{cycles,cpp},
 // streak_end_error_{median,max}_px over `streaks` (10%/90% quantiles of each streak's |layer| along
-// its projected path), the seconds of both renderers and their ratio.
+// its projected path; the nearest `nearest` particles with both ends in the image and at most half of
+// their capsule under other particles' streaks), the seconds of both renderers and their ratio.
 Json validate_against_cycles(const CyclesValidationOptions& options);
 
 }  // namespace weathergs::datagen

@@ -180,7 +180,15 @@ def add_particles(particles):
     diffuse.inputs["Roughness"].default_value = 0.0
     clear = nt.nodes.new("ShaderNodeBsdfTransparent")
     mix = nt.nodes.new("ShaderNodeMixShader")
-    mix.inputs["Fac"].default_value = snow["opacity"]
+    # One scattering surface per flake, as the generator's: the front face covers `opacity`, the back
+    # face is fully transparent (else light passing the front would meet a second, inner face).
+    geometry = nt.nodes.new("ShaderNodeNewGeometry")
+    front = nt.nodes.new("ShaderNodeMath")
+    front.operation = "MULTIPLY_ADD"  # opacity * (-backfacing) + opacity
+    front.inputs[1].default_value = -snow["opacity"]
+    front.inputs[2].default_value = snow["opacity"]
+    nt.links.new(geometry.outputs["Backfacing"], front.inputs[0])
+    nt.links.new(front.outputs[0], mix.inputs["Fac"])
     nt.links.new(clear.outputs[0], mix.inputs[1])
     nt.links.new(diffuse.outputs[0], mix.inputs[2])
     out = nt.nodes.new("ShaderNodeOutputMaterial")
