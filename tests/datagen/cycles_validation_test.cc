@@ -3,6 +3,7 @@
 // fewer pixels and samples leave more Monte Carlo noise in the reference. ~3 min: labelled slow.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "datagen/cycles_validation.h"
@@ -17,11 +18,14 @@ namespace {
 namespace fs = std::filesystem;
 using testing::TempDir;
 
-// At the quick profile and 1024 samples the benchmark needs >= 6 dB, +-20% energy, 2 px; here 256
-// samples at 192x128 raise the reference's noise floor by ~9 dB and put fewer particles in view.
-constexpr double kMinGainDb = 3.0;
-constexpr double kEnergyRatioLo = 0.6, kEnergyRatioHi = 1.5;
-constexpr double kMaxMedianStreakErrorPx = 4.0;
+// At the quick profile and 1024 samples the benchmark needs >= 6 dB, +-20% energy, 2 px; 256 samples
+// at 192x128 raise the reference's noise floor and put fewer particles in view. Measured here
+// (2026-11-25): rain 100 mm/h +5.7 dB, energy 1.03, streak ends 2.0 px; snow 10 mm/h +9.9 dB, 0.89,
+// 0.3 px. The former weighted shading gives rain +3.6 dB, 1.21, 3.0 px and snow +6.3 dB, 0.67: each
+// fails at least two of these bounds (checked by running this test with it).
+constexpr double kMinGainRainDb = 4.5, kMinGainSnowDb = 8.0;
+constexpr double kEnergyRatioLo = 0.75, kEnergyRatioHi = 1.15;
+constexpr double kMaxMedianStreakErrorPx = 2.5;
 
 std::string scene_path(const std::string& name) { return std::string(WEATHERGS_SOURCE_DIR) + "/scenes/" + name; }
 
@@ -33,7 +37,8 @@ Json physical_spec(const char* species, double rate, double sun_strength) {
           {"effects", {{species, {{"rate_mm_h", rate}, {"wind_m_s", {1.0, 0.0, 0.0}}}}}}};
 }
 
-void validate(const TempDir& tmp, const std::string& variant, const char* species, double rate, double sun) {
+void validate(const TempDir& tmp, const std::string& variant, const char* species, double rate, double sun,
+              double min_gain_db) {
   if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
   GenerateOptions g;
   g.blender.script = testing::blender_script();
@@ -55,9 +60,11 @@ void validate(const TempDir& tmp, const std::string& variant, const char* specie
   o.out_dir = tmp / (variant + "_cycles");
   o.blender_script = testing::blender_script();
   o.scene_spec = scene_path("pool.json");
-  const Json r = validate_against_cycles(o);
+  Json r = validate_against_cycles(o);
+  r.erase("streaks");
+  std::printf("%s %s: %s\n", variant.c_str(), species, r.dump().c_str());  // for the record in the test log
   SCOPED_TRACE(r.dump(1));
-  EXPECT_GE(r["gain_over_no_weather_box4_db"].get<double>(), kMinGainDb);
+  EXPECT_GE(r["gain_over_no_weather_box4_db"].get<double>(), min_gain_db);
   EXPECT_GE(r["energy_ratio_cpp_over_cycles"].get<double>(), kEnergyRatioLo);
   EXPECT_LE(r["energy_ratio_cpp_over_cycles"].get<double>(), kEnergyRatioHi);
   EXPECT_GE(r["streaks_compared"].get<int>(), 5);
@@ -66,12 +73,12 @@ void validate(const TempDir& tmp, const std::string& variant, const char* specie
 
 TEST(CyclesValidation, HeavyRainAgreesWithThePathTracer) {
   TempDir tmp;
-  validate(tmp, "rain", "rain", 100, 0.3);
+  validate(tmp, "rain", "rain", 100, 0.3, kMinGainRainDb);
 }
 
 TEST(CyclesValidation, HeavySnowAgreesWithThePathTracer) {
   TempDir tmp;
-  validate(tmp, "snow", "snow", 10, 0.6);
+  validate(tmp, "snow", "snow", 10, 0.6, kMinGainSnowDb);
 }
 
 TEST(CyclesValidation, BadOptionsAndMissingDatasetAreInputErrors) {
