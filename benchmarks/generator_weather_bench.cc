@@ -116,6 +116,16 @@ void BM_Rain(benchmark::State& state, RenderOptions options) {
   state.counters["particles_drawn"] = double(drawn);
 }
 
+// The physical shading's per-view cost: the environment and the water-sphere radiance grid.
+void BM_WaterRadianceGrid(benchmark::State& state) {
+  const Scene& sc = scene();
+  for (auto _ : state) {
+    const ViewEnvironment env(sc.camera, sc.clean, sc.env.sky);
+    const ParticleRadianceGrid grid(env, sc.camera, ParticleOptics::kWaterSphere, 0);
+    benchmark::DoNotOptimize(grid.at(300, 200));
+  }
+}
+
 }  // namespace
 }  // namespace weathergs
 
@@ -124,6 +134,7 @@ int main(int argc, char** argv) {
   const std::vector<Setting> list = settings();
   for (const Setting& s : list) benchmark::RegisterBenchmark(("rain_600x400/" + s.name).c_str(), BM_Rain, s.options)
                                     ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("water_radiance_grid_600x400", BM_WaterRadianceGrid)->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
 
