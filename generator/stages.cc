@@ -248,7 +248,7 @@ void ParticleStage::run(WeatherView& v) const {
     v.particle_alpha.data[p] = 1.0f - (1.0f - v.particle_alpha.data[p]) * (1.0f - raster.alpha.data[p]);
   v.has_particles = true;
   v.layers[species + "_alpha"] = raster.alpha;
-  v.layers[species + "_radiance"] = raster.radiance;  // the float layer alpha (L - background) is made of
+  v.layers[species + "_radiance"] = raster.radiance;  // with the alpha: this stage's layer, alpha (L - below), in float
 
   int64_t visible = 0;
   for (uint8_t b : raster.visible) visible += b;
