@@ -9,8 +9,9 @@
 //   a drop shows a ~165 degree cone of its surroundings, most of it outside the camera's frame;
 // - Lambertian sphere (snow): the disk-averaged radiance per unit irradiance from phase angle a is
 //   albedo (2 / (3 pi^2)) (sin a + (pi - a) cos a) (the Lambert sphere's phase law).
-// E is the clean view where w falls inside the image, and outside it the sky radiance above the
-// horizon (world +z up) and the view's mean radiance below the horizon ("ground") elsewhere.
+// E is the clean view where w falls inside the image; outside it, the sky radiance above the horizon
+// (world +z up) and below it the mean of the view's below-horizon pixels ("ground"). A sun, when
+// given, adds a point source.
 #pragma once
 
 #include <Eigen/Core>
