@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
       else throw InputError(k, "unknown option (expected --dataset, --view, --samples, --nearest, --out, --blender, --reuse-renders)");
     }
     Json result = datagen::validate_against_cycles(o);
-    result.erase("streaks");
+    if (result.contains("streaks")) result.erase("streaks");
     std::printf("%s\n", result.dump(1).c_str());
     return 0;
   } catch (const InputError& e) {

@@ -31,8 +31,8 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from weathergs_blender.builder import Builder  # noqa: E402
 from weathergs_blender.layouts import LAYOUTS  # noqa: E402
 from weathergs_blender.materials import build_material  # noqa: E402
-from weathergs_blender.render import (add_markers, add_particles, blender_from_opencv, intrinsics,  # noqa: E402
-                                      opencv_from_blender, setup_lights, setup_render)
+from weathergs_blender.render import (add_lens_drops, add_markers, add_particles, blender_from_opencv,  # noqa: E402
+                                      intrinsics, opencv_from_blender, setup_lights, setup_render)
 from weathergs_blender.spec import Params, SpecError  # noqa: E402
 
 
@@ -80,6 +80,7 @@ def run(job):
     cam = bpy.data.objects.new("camera", cam_data)
     scene.collection.objects.link(cam)
     scene.camera = cam
+    lens_coll = add_lens_drops(job["lens_drops"], cam) if job.get("lens_drops") else None
 
     render = job["render"]
     image_dir, depth_dir = job["outputs"]["images"], job["outputs"]["depth"]
@@ -100,6 +101,8 @@ def run(job):
         scene.frame_set(frame)
         if particle_coll is not None:
             particle_coll.hide_render = not view.get("particles", True)
+        if lens_coll is not None:
+            lens_coll.hide_render = not view.get("lens", True)
         if render["engine"] == "cycles":
             scene.cycles.seed = view.get("seed", render["seed"])
         fo.file_slots[0].path = view["name"] + "_"

@@ -163,11 +163,15 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   const Dataset ds = read_dataset(o.dataset);
   if (!ds.info.generator) throw InputError(o.dataset + "/dataset.json", "no generator block: not a generated dataset");
   const Json& gen = *ds.info.generator;
-  for (const auto& [effect, body] : gen.at("spec").at("effects").items())
-    if (effect != "rain" && effect != "snow")
-      throw InputError(o.dataset + "/dataset.json",
-                       "the validation compares the particle layer alone, but the spec has \"" + effect +
-                           "\" (make the dataset with rain and/or snow only)");
+  const Json& effects = gen.at("spec").at("effects");
+  // Two kinds: the particle layer (rain and/or snow) or the lens-drop layer (lens_droplets alone).
+  const bool lens = effects.size() == 1 && effects.contains("lens_droplets");
+  if (!lens)
+    for (const auto& [effect, body] : effects.items())
+      if (effect != "rain" && effect != "snow")
+        throw InputError(o.dataset + "/dataset.json",
+                         "the validation compares one layer alone, but the spec has \"" + effect +
+                             "\" with others (make the dataset with rain and/or snow, or lens_droplets, only)");
   const SceneSpec scene = read_scene_spec(o.scene_spec.empty() ? gen.at("scene_spec").get<std::string>() : o.scene_spec);
   const VariantSpec variant = scene.variant(gen.at("variant").get<std::string>());
   ProfileSpec profile = scene.profile(gen.at("profile").get<std::string>());
@@ -180,6 +184,7 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   Json items = Json::array();
   double weather_seconds = 0;
   for (const char* species : {"rain", "snow"}) {
+    if (lens) break;
     const std::string csv = ds.root + "/layers/particles_" + species + "/" + o.view + ".csv";
     if (!fs::exists(csv)) continue;
     species_present.push_back(species);
@@ -196,7 +201,26 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
       if (st.value("name", "") == species) last = st.value("seconds", 0.0);
     weather_seconds += last;
   }
-  if (items.empty()) throw InputError(o.dataset, "no particles in the manifests of view " + o.view);
+  Json lens_job;
+  if (lens) {
+    const Json& spec = effects.at("lens_droplets");
+    if (spec.at("attach") != "lens" || spec.at("drop_side") != "scene" ||
+        spec.at("glass_tilt_deg") != Json::array({0.0, 0.0}))
+      throw InputError(o.dataset + "/dataset.json",
+                       "the lens validation models drops on the scene side of an untilted glass attached to the lens");
+    for (const Json& v : gen.at("lens_droplets").at("views"))
+      if (v.at("view") == o.view)
+        for (const Json& d : v.at("drops"))
+          items.push_back({{"base_center_camera_m", d.at("base_center_camera_m")},
+                           {"sphere_radius_m", 1e-3 * d.at("sphere_radius_mm").get<double>()},
+                           {"contact_angle_deg", d.at("contact_angle_deg")}});
+    lens_job = {{"refractive_index", spec.at("refractive_index")}, {"drops", items}};
+    double last = 0;
+    for (const auto& st : gen.at("stages"))
+      if (st.value("name", "") == "lens_droplets") last = st.value("seconds", 0.0);
+    weather_seconds = last;
+  }
+  if (items.empty()) throw InputError(o.dataset, "no particles or lens drops recorded for view " + o.view);
 
   // The third render repeats the weather view with another sampling seed: the PSNR between the two
   // Cycles layers is the Monte Carlo noise floor of the reference itself.
@@ -209,10 +233,15 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   const std::string raw = fs::absolute(o.out_dir).string() + "/render";
   Json job = blender_job(scene, variant, profile, {plain, weather, plain2, weather2}, {});
   for (int i = 0; i < 4; ++i) {
-    job["camera"]["views"][i]["particles"] = i % 2 == 1;
+    job["camera"]["views"][i][lens ? "lens" : "particles"] = i % 2 == 1;
     job["camera"]["views"][i]["seed"] = i < 2 ? 0 : 1;
   }
-  job["particles"] = {{"exposure_s", cam.exposure_s}, {"items", items}};
+  if (lens) {
+    job["lens_drops"] = lens_job;
+    // The drops sit centimetres from the pinhole: inside the scene renders' near clip.
+    job["camera"]["clip_start_m"] = 1e-4;
+  }
+  else job["particles"] = {{"exposure_s", cam.exposure_s}, {"items", items}};
   if (gen.at("spec").at("effects").contains("snow")) {
     const Json& snow = gen.at("spec").at("effects").at("snow");
     job["particles"]["snow"] = {{"albedo", snow.at("appearance").value("albedo", 0.9)},
@@ -220,7 +249,9 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   }
   job["render"]["float_images"] = true;
   // The generator defocuses particles through the camera's lens when the spec says so: so does Cycles.
-  const bool defocus = gen.at("spec").at("render").value("defocus", false) && cam.f_number && cam.focus_distance_m;
+  const bool defocus = (lens ? effects.at("lens_droplets").value("defocus", false)
+                             : gen.at("spec").at("render").value("defocus", false)) &&
+                       cam.f_number && cam.focus_distance_m;
   if (defocus) job["camera"]["dof"] = {{"focus_distance_m", *cam.focus_distance_m}, {"f_number", *cam.f_number}};
   job["output_dir"] = raw;
   const std::string job_path = fs::absolute(o.out_dir).string() + "/job.json";
@@ -252,7 +283,8 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   // replayed from the float layers on the clean view. (The 8-bit images would quantize the faint
   // physical streaks away.)
   const Image clean = to_linear(to_rgb(read_image(ds.path(ImageKind::kClean, o.view))));
-  Image composite = clean;
+  // Lens drops change the image by far more than an 8-bit level: their layer is images - clean.
+  Image composite = lens ? to_linear(to_rgb(read_image(ds.path(ImageKind::kImages, o.view)))) : clean;
   for (const std::string& species : species_present) {
     const Image alpha = read_image(ds.root + "/layers/" + species + "_alpha/" + o.view + ".exr");
     const Image light = read_image(ds.root + "/layers/" + species + "_radiance/" + o.view + ".exr");
@@ -270,13 +302,25 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   const double noise_var_box = mse_of(bc, &bc2) / 2;
   const double energy_cycles = std::sqrt(std::max(0.0, mse_of(bc, nullptr) - noise_var_box));
   const double energy_cpp = std::sqrt(mse_of(bp, nullptr));
+  // Where each layer changes the view noticeably (any channel by more than kChanged in linear radiance,
+  // ~5 8-bit levels at mid grey) on the 4x4-averaged layers, and how well the two regions overlap.
+  constexpr float kChanged = 0.02f;
+  int64_t changed_both = 0, changed_any = 0, changed_cyc = 0, changed_cpp = 0;
+  for (size_t p = 0; p < bc.num_pixels(); ++p) {
+    bool a = false, b = false;
+    for (int c = 0; c < 3; ++c) {
+      a = a || std::abs(bc.data[p * 3 + c]) > kChanged;
+      b = b || std::abs(bp.data[p * 3 + c]) > kChanged;
+    }
+    changed_both += a && b, changed_any += a || b, changed_cyc += a, changed_cpp += b;
+  }
   double mean_cyc = 0, mean_cpp = 0;
   for (size_t i = 0; i < lc.data.size(); ++i) mean_cyc += lc.data[i], mean_cpp += lp.data[i];
   mean_cyc /= double(lc.data.size()), mean_cpp /= double(lc.data.size());
 
   // Streak extents of the nearest particles whose paths lie inside the image (an extent cut by the
   // frame says nothing about the renderer) and mostly clear of other particles' streaks.
-  const std::optional<ThinLens> lens = defocus ? thin_lens_of(cam) : std::nullopt;
+  const std::optional<ThinLens> thin_lens = defocus ? thin_lens_of(cam) : std::nullopt;
   const double f = std::sqrt(cam.fx * cam.fy);
   std::vector<std::optional<Capsule>> capsules(particles.size());
   std::vector<int> shared(size_t(cam.width) * cam.height, 0);
@@ -284,7 +328,7 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
     const ManifestParticle& p = particles[i];
     const Eigen::Vector3d c0 = cam.to_camera(p.p_world), c1 = cam.to_camera(p.p_world + p.v_world * cam.exposure_s);
     if (!(c0.z() > 0.05 && c1.z() > 0.05)) continue;
-    const double z = 0.5 * (c0.z() + c1.z()), r_px = f * p.radius_m / z, coc = lens ? lens->coc_radius_px(f, z) : 0.0;
+    const double z = 0.5 * (c0.z() + c1.z()), r_px = f * p.radius_m / z, coc = thin_lens ? thin_lens->coc_radius_px(f, z) : 0.0;
     capsules[i] = Capsule{cam.project_camera(c0), cam.project_camera(c1), 1.5 + std::sqrt(r_px * r_px + coc * coc)};
     capsules[i]->for_each_pixel(cam.width, cam.height, [&](int x, int y, double) { ++shared[size_t(y) * cam.width + x]; });
   }
@@ -322,9 +366,10 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
 
   const double cpp_per_view_s = weather_seconds / double(ds.cameras.size());
   const double psnr_box = psnr_of(mse_of(bc, &bp)), psnr_box_zero = psnr_of(mse_of(bc, nullptr));
-  const Json result = {{"dataset", ds.info.name},
+  Json result = {{"dataset", ds.info.name},
+                       {"layer", lens ? "lens_droplets" : "particles"},
                        {"view", o.view},
-                       {"particles", items.size()},
+                       {lens ? "lens_drops" : "particles", items.size()},
                        {"cycles_samples", o.samples},
                        {"depth_of_field", defocus},
                        {"psnr_weather_layer_db", psnr_of(mse_of(lc, &lp))},
@@ -334,6 +379,9 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
                        {"psnr_no_weather_baseline_box4_db", psnr_box_zero},
                        {"psnr_cycles_seed_vs_seed_box4_db", psnr_of(mse_of(bc, &bc2))},
                        {"gain_over_no_weather_box4_db", psnr_box - psnr_box_zero},
+                       {"changed_fraction_cycles", double(changed_cyc) / double(bc.num_pixels())},
+                       {"changed_fraction_cpp", double(changed_cpp) / double(bc.num_pixels())},
+                       {"changed_iou", changed_any > 0 ? double(changed_both) / double(changed_any) : 1.0},
                        {"mean_layer_cycles", mean_cyc},
                        {"mean_layer_cpp", mean_cpp},
                        {"energy_box4_cycles", energy_cycles},
@@ -347,6 +395,9 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
                        {"cycles_seconds_plain", cycles_plain_s},
                        {"cpp_weather_seconds_per_view", cpp_per_view_s},
                        {"time_ratio_cycles_over_cpp", cycles_weather_s / std::max(cpp_per_view_s, 1e-9)}};
+  if (lens)
+    for (const char* key : {"streaks", "streaks_compared", "streak_end_error_median_px", "streak_end_error_max_px"})
+      result.erase(key);
   write_file_atomic(o.out_dir + "/result.json", result.dump(1));
   return result;
 }

@@ -1,8 +1,12 @@
 // Path-tracer validation of the weather compositor (issues 5 and 10 §1; benchmarks/README.md,
 // "Path-tracer validation").
 //
-// A dataset made by `weathergs generate` or `weathergs weather` with rain and/or snow only, with the
-// generator's particle manifests and float layers: the view's particles (position at shutter open,
+// Lens drops (a dataset whose spec has lens_droplets alone, attached to the lens, untilted, on the
+// scene side): the view's drops from dataset.json go to Blender as water caps closed by their base,
+// parented to the camera, with the camera's depth of field when the effect defocuses; the C++ layer is
+// images - clean (the drops change far more than an 8-bit level). Particles: a dataset made by
+// `weathergs generate` or `weathergs weather` with rain and/or snow only, with the generator's
+// particle manifests and float layers: the view's particles (position at shutter open,
 // velocity, visual diameter) go to Blender as water spheres (rain) or Lambertian flakes of the spec's
 // albedo and opacity (snow), moving linearly over the exposure; Cycles renders the variant's scene with
 // and without them (same sampling seed, so the noise of paths that miss every particle cancels), with
@@ -32,7 +36,8 @@ struct CyclesValidationOptions {
 
 // Runs Cycles and compares; returns (and writes to out_dir/result.json) the figures:
 // psnr_weather_layer[_box4]_db, psnr_no_weather_baseline[_box4]_db, psnr_cycles_seed_vs_seed[_box4]_db,
-// gain_over_no_weather_box4_db, energy_box4_{cycles,cpp} (RMS of the 4x4-averaged layer; Cycles' with
+// gain_over_no_weather_box4_db, changed_fraction_{cycles,cpp} and changed_iou (where the 4x4-averaged
+// layers change the view by more than 0.02, and the IoU of those regions), energy_box4_{cycles,cpp} (RMS of the 4x4-averaged layer; Cycles' with
 // its noise variance removed), energy_ratio_cpp_over_cycles, mean_layer_{cycles,cpp},
 // streak_end_error_{median,max}_px over `streaks` (10%/90% quantiles of each streak's |layer| along
 // its projected path; the nearest `nearest` particles with both ends in the image and at most half of

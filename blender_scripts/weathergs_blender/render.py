@@ -224,3 +224,49 @@ def add_particles(particles):
     scene.render.motion_blur_shutter = 1.0  # frames: exactly frame 1 -> 2, i.e. the exposure
     scene.cycles.motion_blur_position = "START"
     return coll
+
+
+def add_lens_drops(lens, camera):
+    """Water drops on the cover glass for the path-tracer validation of the lens-drop layer
+    (docs/lens_droplets.md): each drop a spherical cap closed by its flat base, water (glass BSDF,
+    IOR lens["refractive_index"]), built in OpenCV camera coordinates from the generator's drop list
+    and parented to the camera. No glass plate: a thin parallel plate turns no ray (the generator's
+    model), and a water base coincident with a glass face would leave Cycles two surfaces at one depth.
+    Returns the collection (hidden per view with "lens": false)."""
+    coll = bpy.data.collections.new("lens_drops")
+    bpy.context.scene.collection.children.link(coll)
+    water = bpy.data.materials.new("lens_water")
+    water.use_nodes = True
+    nt = water.node_tree
+    nt.nodes.clear()
+    glass = nt.nodes.new("ShaderNodeBsdfGlass")
+    glass.inputs["IOR"].default_value = lens["refractive_index"]
+    glass.inputs["Roughness"].default_value = 0.0
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(glass.outputs[0], out.inputs["Surface"])
+    for i, d in enumerate(lens["drops"]):
+        cx, cy, cz = d["base_center_camera_m"]  # OpenCV camera frame; the glass is the plane z = cz
+        R = d["sphere_radius_m"]
+        theta = math.radians(d["contact_angle_deg"])
+        bm = bmesh.new()
+        bmesh.ops.create_uvsphere(bm, u_segments=96, v_segments=48, radius=R)
+        # The ball's centre lies R cos(theta) behind the glass (towards the camera) for a cap bulging
+        # towards the scene; keep what is beyond the glass and close it with the flat base.
+        bmesh.ops.translate(bm, verts=bm.verts, vec=(cx, cy, cz - R * math.cos(theta)))
+        cut = bmesh.ops.bisect_plane(bm, geom=bm.verts[:] + bm.edges[:] + bm.faces[:], dist=1e-9,
+                                     plane_co=(0.0, 0.0, cz), plane_no=(0.0, 0.0, 1.0), clear_inner=True)
+        edges = [e for e in cut["geom_cut"] if isinstance(e, bmesh.types.BMEdge)]
+        bmesh.ops.edgeloop_fill(bm, edges=edges)
+        for v in bm.verts:  # OpenCV camera -> Blender camera axes (x, -y, -z)
+            v.co = Vector((v.co.x, -v.co.y, -v.co.z))
+        bmesh.ops.recalc_face_normals(bm, faces=bm.faces)
+        for f in bm.faces:
+            f.smooth = len(f.verts) < 5  # the base polygon stays flat
+        mesh = bpy.data.meshes.new(f"lens_drop{i}")
+        bm.to_mesh(mesh)
+        bm.free()
+        mesh.materials.append(water)
+        obj = bpy.data.objects.new(f"lens_drop{i}", mesh)
+        obj.parent = camera
+        coll.objects.link(obj)
+    return coll

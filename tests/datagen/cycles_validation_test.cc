@@ -61,7 +61,7 @@ void validate(const TempDir& tmp, const std::string& variant, const char* specie
   o.blender_script = testing::blender_script();
   o.scene_spec = scene_path("pool.json");
   Json r = validate_against_cycles(o);
-  r.erase("streaks");
+  if (r.contains("streaks")) r.erase("streaks");
   std::printf("%s %s: %s\n", variant.c_str(), species, r.dump().c_str());  // for the record in the test log
   SCOPED_TRACE(r.dump(1));
   EXPECT_GE(r["gain_over_no_weather_box4_db"].get<double>(), min_gain_db);
@@ -79,6 +79,40 @@ TEST(CyclesValidation, HeavyRainAgreesWithThePathTracer) {
 TEST(CyclesValidation, HeavySnowAgreesWithThePathTracer) {
   TempDir tmp;
   validate(tmp, "snow", "snow", 10, 0.6, kMinGainSnowDb);
+}
+
+// Lens drops through a pinhole (no defocus): the layer does not yet agree with Cycles in value
+// (benchmarks/README.md: no closer than an empty layer), but the drops must be where the generator put
+// them: the regions the two layers change overlap (IoU 0.37 here, 0.48 at the quick profile; with the
+// drops mirrored top to bottom in the Blender script: 0.08, checked).
+constexpr double kMinLensChangedIou = 0.3;
+
+TEST(CyclesValidation, LensDropsSitWhereTheGeneratorPutThem) {
+  if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
+  TempDir tmp;
+  GenerateOptions g;
+  g.blender.script = testing::blender_script();
+  g.blender.max_views = 2;
+  g.profile = "tiny";
+  g.cache_dir = tmp / "cache";
+  const SceneSpec scene = read_scene_spec(scene_path("pool.json"));
+  bool hit = false;
+  double seconds = 0;
+  const std::string clean = ensure_clean_render(scene, "rain", g, &hit, &seconds);
+  const Json spec = {{"seed", 7},
+                     {"effects", {{"lens_droplets", {{"count", 20}, {"radius_mm", {0.3, 1.5}}, {"glass_distance_m", 0.015},
+                                                     {"defocus", false}}}}}};
+  run_weather(clean, JsonReader(spec, "spec.json"), tmp / "lens", WeatherRunOptions{});
+  CyclesValidationOptions o;
+  o.dataset = tmp / "lens";
+  o.samples = 64;
+  o.out_dir = tmp / "lens_cycles";
+  o.blender_script = testing::blender_script();
+  o.scene_spec = scene_path("pool.json");
+  Json r = validate_against_cycles(o);
+  std::printf("lens: %s\n", r.dump().c_str());
+  EXPECT_EQ(r["layer"], "lens_droplets");
+  EXPECT_GE(r["changed_iou"].get<double>(), kMinLensChangedIou) << r.dump(1);
 }
 
 TEST(CyclesValidation, BadOptionsAndMissingDatasetAreInputErrors) {
