@@ -150,6 +150,20 @@ def add_markers(markers):
     return len(markers)
 
 
+def water_material(name, ior):
+    """Clear water: a smooth glass BSDF of refractive index `ior`."""
+    water = bpy.data.materials.new(name)
+    water.use_nodes = True
+    nt = water.node_tree
+    nt.nodes.clear()
+    glass = nt.nodes.new("ShaderNodeBsdfGlass")
+    glass.inputs["IOR"].default_value = ior
+    glass.inputs["Roughness"].default_value = 0.0
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    nt.links.new(glass.outputs[0], out.inputs["Surface"])
+    return water
+
+
 def add_particles(particles):
     """Airborne particles for the path-tracer validation only (docs/scenes.md): rain drops as water
     spheres (glass, IOR 1.333), snow flakes as Lambertian spheres (particles["snow"]: albedo,
@@ -158,15 +172,7 @@ def add_particles(particles):
     collection (hidden per view with "particles": false)."""
     coll = bpy.data.collections.new("particles")
     bpy.context.scene.collection.children.link(coll)
-    water = bpy.data.materials.new("water_drop")
-    water.use_nodes = True
-    nt = water.node_tree
-    nt.nodes.clear()
-    glass = nt.nodes.new("ShaderNodeBsdfGlass")
-    glass.inputs["IOR"].default_value = 1.333
-    glass.inputs["Roughness"].default_value = 0.0
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    nt.links.new(glass.outputs[0], out.inputs["Surface"])
+    water = water_material("water_drop", 1.333)
     # Snow: the generator's flake, a Lambertian sphere of the spec's albedo that covers `opacity` of
     # its disk (the rest transparent).
     snow = particles.get("snow", {"albedo": 0.9, "opacity": 1.0})
@@ -235,15 +241,7 @@ def add_lens_drops(lens, camera):
     Returns the collection (hidden per view with "lens": false)."""
     coll = bpy.data.collections.new("lens_drops")
     bpy.context.scene.collection.children.link(coll)
-    water = bpy.data.materials.new("lens_water")
-    water.use_nodes = True
-    nt = water.node_tree
-    nt.nodes.clear()
-    glass = nt.nodes.new("ShaderNodeBsdfGlass")
-    glass.inputs["IOR"].default_value = lens["refractive_index"]
-    glass.inputs["Roughness"].default_value = 0.0
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
-    nt.links.new(glass.outputs[0], out.inputs["Surface"])
+    water = water_material("lens_water", lens["refractive_index"])
     for i, d in enumerate(lens["drops"]):
         cx, cy, cz = d["base_center_camera_m"]  # OpenCV camera frame; the glass is the plane z = cz
         R = d["sphere_radius_m"]

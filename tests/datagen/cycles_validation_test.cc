@@ -29,6 +29,18 @@ constexpr double kMaxMedianStreakErrorPx = 2.5;
 
 std::string scene_path(const std::string& name) { return std::string(WEATHERGS_SOURCE_DIR) + "/scenes/" + name; }
 
+// The clean render of pool/<variant> at the tiny profile, its first two views (cached in tmp).
+std::string tiny_clean_render(const TempDir& tmp, const std::string& variant) {
+  GenerateOptions g;
+  g.blender.script = testing::blender_script();
+  g.blender.max_views = 2;
+  g.profile = "tiny";
+  g.cache_dir = tmp / "cache";
+  bool hit = false;
+  double seconds = 0;
+  return ensure_clean_render(read_scene_spec(scene_path("pool.json")), variant, g, &hit, &seconds);
+}
+
 Json physical_spec(const char* species, double rate, double sun_strength) {
   const double s = sun_strength;
   return {{"seed", 7},
@@ -40,15 +52,7 @@ Json physical_spec(const char* species, double rate, double sun_strength) {
 void validate(const TempDir& tmp, const std::string& variant, const char* species, double rate, double sun,
               double min_gain_db) {
   if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
-  GenerateOptions g;
-  g.blender.script = testing::blender_script();
-  g.blender.max_views = 2;
-  g.profile = "tiny";
-  g.cache_dir = tmp / "cache";
-  const SceneSpec scene = read_scene_spec(scene_path("pool.json"));
-  bool hit = false;
-  double seconds = 0;
-  const std::string clean = ensure_clean_render(scene, variant, g, &hit, &seconds);
+  const std::string clean = tiny_clean_render(tmp, variant);
   const std::string data = tmp / (variant + "_physical");
   run_weather(clean, JsonReader(physical_spec(species, rate, sun), "spec.json"), data, WeatherRunOptions{});
 
@@ -90,15 +94,7 @@ constexpr double kMinLensChangedIou = 0.3;
 TEST(CyclesValidation, LensDropsSitWhereTheGeneratorPutThem) {
   if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
   TempDir tmp;
-  GenerateOptions g;
-  g.blender.script = testing::blender_script();
-  g.blender.max_views = 2;
-  g.profile = "tiny";
-  g.cache_dir = tmp / "cache";
-  const SceneSpec scene = read_scene_spec(scene_path("pool.json"));
-  bool hit = false;
-  double seconds = 0;
-  const std::string clean = ensure_clean_render(scene, "rain", g, &hit, &seconds);
+  const std::string clean = tiny_clean_render(tmp, "rain");
   const Json spec = {{"seed", 7},
                      {"effects", {{"lens_droplets", {{"count", 20}, {"radius_mm", {0.3, 1.5}}, {"glass_distance_m", 0.015},
                                                      {"defocus", false}}}}}};
