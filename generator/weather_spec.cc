@@ -375,6 +375,11 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
   // Dispatch point for generator/lens: it parses effects.lens_droplets here.
   if (effects.has("lens_droplets")) {
     spec.lens_droplets = lens::parse_lens_droplet_spec(effects.child("lens_droplets"));
+    // Physical style: light the drops' unfollowed paths (surface reflections, rays trapped by total
+    // internal reflection) with the sky, which agrees with Cycles (benchmarks/README.md, "Lens drops
+    // against Cycles"); the paper style keeps the view's mean its suite was generated with.
+    if (spec.style == WeatherStyle::kPhysical && !effects.child("lens_droplets").has("environment_radiance"))
+      spec.lens_droplets->environment_sky = true;
   } else {
     effects.mark("lens_droplets");
   }

@@ -257,6 +257,7 @@ def add_lens_drops(lens, camera):
         bmesh.ops.edgeloop_fill(bm, edges=edges)
         for v in bm.verts:  # OpenCV camera -> Blender camera axes (x, -y, -z)
             v.co = Vector((v.co.x, -v.co.y, -v.co.z))
+        bm.normal_update()  # recalc_face_normals orients by the stored normals: refresh them first
         bmesh.ops.recalc_face_normals(bm, faces=bm.faces)
         for f in bm.faces:
             f.smooth = len(f.verts) < 5  # the base polygon stays flat

@@ -143,7 +143,7 @@ LensDropletRenderer::LensDropletRenderer(const LensDropletSpec& spec, uint64_t s
   if (!field_.drops.empty()) device_ = std::make_unique<EmbreeDevice>();
 }
 
-LensViewResult LensDropletRenderer::render(const Image& image, const Camera& camera, double time_s) const {
+LensViewResult LensDropletRenderer::render(const Image& image, const Camera& camera, double time_s, const Eigen::Vector3f* sky) const {
   const std::string where = "view " + camera.name;
   if (image.channels != 3 || image.space != ColorSpace::kLinear)
     throw InputError(where, "lens droplets need a linear RGB image, got " + image.to_string());
@@ -250,6 +250,9 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
   if (spec_.environment_radiance) {
     environment = {(*spec_.environment_radiance)[0], (*spec_.environment_radiance)[1],
                    (*spec_.environment_radiance)[2]};
+  } else if (spec_.environment_sky) {
+    WGS_CHECK(sky != nullptr);
+    environment = sky->cast<double>();
   } else {
     // Mean radiance of the view, summed row by row in order (deterministic).
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();

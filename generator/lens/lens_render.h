@@ -58,7 +58,9 @@ class LensDropletRenderer {
   LensDropletRenderer(const LensDropletSpec& spec, uint64_t seed, const Camera& reference_camera);
 
   // `image`: the view's linear RGB radiance (clean, or after the airborne effects). Thread-safe.
-  LensViewResult render(const Image& image, const Camera& camera, double time_s) const;
+  // sky: the dataset's sky radiance estimate, required when the spec's environment is "sky".
+  LensViewResult render(const Image& image, const Camera& camera, double time_s,
+                        const Eigen::Vector3f* sky = nullptr) const;
 
   const LensDropletSpec& spec() const { return spec_; }
   const DropField& field() const { return field_; }

@@ -67,8 +67,9 @@ LensDropletSpec parse_lens_droplet_spec(const JsonReader& r) {
   s.cap_segments = r.get_or<int>("cap_segments", s.cap_segments);
   if (r.has("environment_radiance") && r.value()["environment_radiance"].is_string()) {
     std::string v = r.get<std::string>("environment_radiance");
-    if (v != "mean")
-      throw InputError(r.where("environment_radiance"), "expected \"mean\" or [r, g, b], got \"" + v + "\"");
+    if (v != "mean" && v != "sky")
+      throw InputError(r.where("environment_radiance"), "expected \"mean\", \"sky\" or [r, g, b], got \"" + v + "\"");
+    s.environment_sky = v == "sky";
   } else if (r.has("environment_radiance") && !r.value()["environment_radiance"].is_null()) {
     s.environment_radiance = r.get_array_or<3>("environment_radiance", {0, 0, 0});
   } else {
@@ -174,7 +175,7 @@ Json lens_droplet_spec_to_json(const LensDropletSpec& s) {
     j["environment_radiance"] = {(*s.environment_radiance)[0], (*s.environment_radiance)[1],
                                  (*s.environment_radiance)[2]};
   else
-    j["environment_radiance"] = "mean";
+    j["environment_radiance"] = s.environment_sky ? "sky" : "mean";
   j["defocus"] = s.defocus;
   j["mask_rule"] = to_string(s.mask_rule);
   j["mask_min_change_levels"] = s.mask_min_change_levels;

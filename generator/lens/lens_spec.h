@@ -57,7 +57,8 @@ struct LensDropletSpec {
   int max_bounces = 4;                            // total internal reflections followed per path
   CapGeometry geometry = CapGeometry::kAnalytic;
   int cap_segments = 48;                          // triangles geometry: segments around a cap
-  std::optional<std::array<double, 3>> environment_radiance;  // unset: the view's mean radiance
+  std::optional<std::array<double, 3>> environment_radiance;  // unset: the view's mean radiance, or
+  bool environment_sky = false;  // ... the dataset's sky radiance estimate ("sky"; physical style's default)
   bool defocus = true;                            // thin-lens blur of the glass when known
   LensMaskRule mask_rule = LensMaskRule::kPerceptible;
   double mask_min_change_levels = 4;              // perceptible rule: 8-bit sRGB levels (> this)

@@ -3,7 +3,7 @@
 namespace weathergs::lens {
 
 void LensDropletStage::run(WeatherView& view) const {
-  LensViewResult r = renderer_.render(view.radiance, view.camera, view.camera.time_s);
+  LensViewResult r = renderer_.render(view.radiance, view.camera, view.camera.time_s, &view.environment.sky);
   view.radiance = std::move(r.image);
   view.layers["lens_coverage"] = std::move(r.coverage);
   view.lens_mask = std::move(r.mask);
