@@ -208,5 +208,21 @@ TEST(Photometry, SpecShadingAndSun) {
   EXPECT_THROW(parse({{"effects", snow}, {"lighting", extra}}), InputError);
 }
 
+TEST(Photometry, LensDropEnvironmentDefaultsByStyle) {
+  auto parse = [](const Json& j) { return parse_weather_spec(JsonReader(j, "spec.json")); };
+  const Json lens = {{"lens_droplets", {{"count", 5}}}};
+  // Physical: the sky lights the drops' unfollowed paths (agrees with Cycles); paper: the view's mean.
+  EXPECT_TRUE(parse({{"effects", lens}}).lens_droplets->environment_sky);
+  EXPECT_FALSE(parse({{"style", "paper"}, {"effects", lens}}).lens_droplets->environment_sky);
+  const Json mean = {{"lens_droplets", {{"count", 5}, {"environment_radiance", "mean"}}}};
+  EXPECT_FALSE(parse({{"effects", mean}}).lens_droplets->environment_sky);
+  const Json sky = {{"lens_droplets", {{"count", 5}, {"environment_radiance", "sky"}}}};
+  const WeatherSpec s = parse({{"style", "paper"}, {"effects", sky}});
+  EXPECT_TRUE(s.lens_droplets->environment_sky);
+  EXPECT_EQ(s.to_json()["effects"]["lens_droplets"]["environment_radiance"], "sky");  // resolved spec says so
+  const Json bad = {{"lens_droplets", {{"count", 5}, {"environment_radiance", "sun"}}}};
+  EXPECT_THROW(parse({{"effects", bad}}), InputError);
+}
+
 }  // namespace
 }  // namespace weathergs

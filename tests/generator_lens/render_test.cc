@@ -71,6 +71,23 @@ TEST(LensRenderTest, ZeroDropsGiveIdenticalOutputAndNoEmbreeDevice) {
   EXPECT_EQ(ob.camera_rays, 0);
 }
 
+TEST(LensRenderTest, SkyEnvironmentLightsTheUnfollowedPaths) {
+  // "sky": the unfollowed paths take the given sky radiance. A uniform scene under a sky of the same
+  // radiance stays uniform; a brighter sky brightens the drops (and only them); no sky is a check.
+  const Camera cam = test_camera();
+  Image img(cam.width, cam.height, 3, ColorSpace::kLinear, 0.3f);
+  const LensDropletSpec spec = spec_from(R"({"count": 40, "environment_radiance": "sky", "defocus": false})");
+  EXPECT_TRUE(spec.environment_sky);
+  const Eigen::Vector3f same = Eigen::Vector3f::Constant(0.3f), bright = Eigen::Vector3f::Constant(0.9f);
+  LensViewResult a = LensDropletRenderer(spec, 3, cam).render(img, cam, 0.0, &same);
+  EXPECT_LT(max_abs_diff(a.image, img), 1e-5);
+  LensViewResult b = LensDropletRenderer(spec, 3, cam).render(img, cam, 0.0, &bright);
+  EXPECT_GT(mean(b.image), mean(img) + 1e-4);
+  for (size_t p = 0; p < img.num_pixels(); ++p)
+    if (b.coverage.data[p] == 0) ASSERT_EQ(b.image.data[p * 3], img.data[p * 3]) << p;
+  EXPECT_THROW(LensDropletRenderer(spec, 3, cam).render(img, cam, 0.0), InternalError);
+}
+
 TEST(LensRenderTest, ConstantSceneIsUnchangedEnergyIsConserved) {
   // With the environment = the view's mean radiance, every path's weights sum to 1, so a uniform
   // scene stays uniform through drops, reflections, cut paths and the blur.
