@@ -286,8 +286,12 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   // Lens drops change the image by far more than an 8-bit level: their layer is images - clean.
   Image composite = lens ? to_linear(to_rgb(read_image(ds.path(ImageKind::kImages, o.view)))) : clean;
   for (const std::string& species : species_present) {
+    const std::string light_path = ds.root + "/layers/" + species + "_radiance/" + o.view + ".exr";
+    if (!fs::exists(light_path))
+      throw InputError(light_path, "missing: the float radiance layer of the particles (re-run `weathergs weather` "
+                                   "with layers on; datasets made before it existed lack it)");
     const Image alpha = read_image(ds.root + "/layers/" + species + "_alpha/" + o.view + ".exr");
-    const Image light = read_image(ds.root + "/layers/" + species + "_radiance/" + o.view + ".exr");
+    const Image light = read_image(light_path);
     for (size_t p = 0; p < composite.num_pixels(); ++p)
       for (int c = 0; c < 3; ++c) {
         float& v = composite.data[p * 3 + c];
