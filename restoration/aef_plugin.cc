@@ -234,9 +234,7 @@ const AefArchitecture& AefPlugin::architecture() const { return impl_->arch; }
 const Json& AefPlugin::metadata() const { return impl_->metadata; }
 
 int64_t AefPlugin::parameter_count() const {
-  int64_t n = 0;
-  for (const auto& p : impl_->net->parameters()) n += p.numel();
-  return n;
+  return detail::parameter_count(*impl_->net);
 }
 
 void AefPlugin::save(const std::string& stem, const Json& extra) const {
@@ -302,8 +300,7 @@ AefTrainRecord AefPlugin::train(const std::vector<AefExample>& examples, const A
       bt.push_back(cut(ts[k]));
       ba.push_back(cut(as[k]));
     }
-    const double lr = o.learning_rate * (0.05 + 0.95 * 0.5 * (1 + std::cos(M_PI * it / o.iterations)));
-    for (auto& g : adam.param_groups()) static_cast<torch::optim::AdamOptions&>(g.options()).lr(lr);
+    detail::set_cosine_learning_rate(adam, o.learning_rate, it, o.iterations);
     adam.zero_grad();
     const torch::Tensor x = torch::stack(bx);
     const torch::Tensor loss = aef_loss(x, net->forward(x), torch::stack(bt), torch::stack(ba), o);

@@ -215,9 +215,7 @@ void LensDetector::set_threshold(double t) {
 const Json& LensDetector::metadata() const { return impl_->metadata; }
 
 int64_t LensDetector::parameter_count() const {
-  int64_t n = 0;
-  for (const auto& p : impl_->net->parameters()) n += p.numel();
-  return n;
+  return detail::parameter_count(*impl_->net);
 }
 
 void LensDetector::save(const std::string& stem, const Json& extra) const {
@@ -264,8 +262,7 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
       bx.push_back(flip ? xs[k].flip({2}) : xs[k]);
       bm.push_back(flip ? ms[k].flip({2}) : ms[k]);
     }
-    const double lr = o.learning_rate * (0.05 + 0.95 * 0.5 * (1 + std::cos(M_PI * it / o.iterations)));
-    for (auto& g : adam.param_groups()) static_cast<torch::optim::AdamOptions&>(g.options()).lr(lr);
+    detail::set_cosine_learning_rate(adam, o.learning_rate, it, o.iterations);
     adam.zero_grad();
     const torch::Tensor loss = attention_loss(net->forward(torch::stack(bx)), torch::stack(bm), o.theta);
     loss.backward();

@@ -1,10 +1,12 @@
 // Internal to restoration/: the weights file pair of the learned networks (`<stem>.json` manifest +
-// `<stem>.bin` float32 blob): the LED, the AEF plugins and the weather selector. Includes libtorch, so
+// `<stem>.bin` float32 blob) and the two training helpers they share: the LED, the AEF plugins and
+// the weather selector. Includes libtorch, so
 // only the libtorch translation units (lens_detector.cc, aef_plugin.cc, weather_selector.cc) include it.
 #pragma once
 
 #include <torch/torch.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +23,18 @@ inline std::string shape_string(const std::vector<int64_t>& s) {
   std::string out = "[";
   for (size_t i = 0; i < s.size(); ++i) out += (i ? ", " : "") + std::to_string(s[i]);
   return out + "]";
+}
+
+inline int64_t parameter_count(const torch::nn::Module& module) {
+  int64_t n = 0;
+  for (const auto& p : module.parameters()) n += p.numel();
+  return n;
+}
+
+// The learning rate of iteration `it` of `iterations`: a cosine from `base` down to 5% of it.
+inline void set_cosine_learning_rate(torch::optim::Adam& adam, double base, int it, int iterations) {
+  const double lr = base * (0.05 + 0.95 * 0.5 * (1 + std::cos(M_PI * it / iterations)));
+  for (auto& g : adam.param_groups()) static_cast<torch::optim::AdamOptions&>(g.options()).lr(lr);
 }
 
 inline const char* kWeightsFix = "; retrain with `make models` or restore the file from the repository (models/README.md)";

@@ -183,9 +183,7 @@ void WeatherSelector::set_theta(double t) {
 const Json& WeatherSelector::metadata() const { return impl_->metadata; }
 
 int64_t WeatherSelector::parameter_count() const {
-  int64_t n = 0;
-  for (const auto& p : impl_->net->parameters()) n += p.numel();
-  return n;
+  return detail::parameter_count(*impl_->net);
 }
 
 void WeatherSelector::save(const std::string& stem, const Json& extra) const {
@@ -249,8 +247,7 @@ SelectorTrainRecord WeatherSelector::train(const std::vector<SelectorExample>& e
       bx.push_back((x * gain).clamp(0.f, 1.f));
       labels.push_back(c);
     }
-    const double lr = o.learning_rate * (0.05 + 0.95 * 0.5 * (1 + std::cos(M_PI * it / o.iterations)));
-    for (auto& g : adam.param_groups()) static_cast<torch::optim::AdamOptions&>(g.options()).lr(lr);
+    detail::set_cosine_learning_rate(adam, o.learning_rate, it, o.iterations);
     adam.zero_grad();
     const torch::Tensor logits = o.scale * net->cosines(net->forward(torch::stack(bx)));
     const torch::Tensor loss = F::cross_entropy(logits, torch::tensor(labels, torch::kInt64));
