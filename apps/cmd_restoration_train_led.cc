@@ -51,6 +51,8 @@ Command make(CLI::App& root) {
   sub->add_option("--width", t.arch.width, "Internal width in pixels")->capture_default_str();
   sub->add_option("--channels", t.arch.channels, "Feature channels")->capture_default_str();
   sub->add_option("--steps", t.arch.steps, "Recurrent steps")->capture_default_str();
+  sub->add_option("--colour-jitter", t.colour_jitter, "Photometric augmentation: channel and overall gains in [1-j, 1+j] (0 = off)")
+      ->capture_default_str();
   return {sub, [a, sub] {
             a->command = "weathergs train-led";
             for (const CLI::Option* o : sub->get_options())

@@ -114,6 +114,7 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
         {"batch", o.train.batch},
         {"learning_rate", o.train.learning_rate},
         {"theta", o.train.theta},
+        {"colour_jitter", o.train.colour_jitter},
         {"seed", o.train.seed},
         {"threads", o.train.threads},
         {"seconds", result.record.seconds},

@@ -183,6 +183,8 @@ void LedTrainOptions::validate() const {
   if (!(learning_rate > 0 && learning_rate < 1))
     throw InputError("LED training learning_rate", "expected in (0, 1), got " + std::to_string(learning_rate));
   if (!(theta > 0 && theta <= 1)) throw InputError("LED training theta", "expected in (0, 1], got " + std::to_string(theta));
+  if (!(colour_jitter >= 0 && colour_jitter <= 0.5))
+    throw InputError("LED training colour_jitter", "expected in [0, 0.5], got " + std::to_string(colour_jitter));
   if (threads < 0) throw InputError("LED training threads", "expected >= 0, got " + std::to_string(threads));
 }
 
@@ -259,7 +261,16 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
     for (int b = 0; b < o.batch; ++b) {
       const size_t k = rng.uniform_int(uint32_t(xs.size()));
       const bool flip = rng.uniform() < 0.5f;
-      bx.push_back(flip ? xs[k].flip({2}) : xs[k]);
+      torch::Tensor x = flip ? xs[k].flip({2}) : xs[k];
+      if (o.colour_jitter > 0) {
+        const float j = float(o.colour_jitter);
+        const float overall = 1.f + j * (2.f * rng.uniform() - 1.f);
+        float gain[4];
+        for (int c = 0; c < 3; ++c) gain[c] = overall * (1.f + j * (2.f * rng.uniform() - 1.f));
+        gain[3] = overall;
+        x = (x * torch::tensor({gain[0], gain[1], gain[2], gain[3]}).view({4, 1, 1})).clamp(0.f, 1.f);
+      }
+      bx.push_back(x);
       bm.push_back(flip ? ms[k].flip({2}) : ms[k]);
     }
     detail::set_cosine_learning_rate(adam, o.learning_rate, it, o.iterations);

@@ -37,6 +37,10 @@ struct LedTrainOptions {
   int batch = 4;
   double learning_rate = 2e-3;  // Adam; cosine-decayed to 5% over the run
   double theta = 0.8;           // weight of step t is theta^(N-t)
+  // Photometric augmentation, in [0, 0.5]: each drawn example's RGB channels are scaled by gains
+  // uniform in [1 - j, 1 + j], times an overall gain from the same range that also scales the
+  // sharpness channel (values clamped to [0, 1]). 0 = off (no draws: the run of an older version).
+  double colour_jitter = 0;
   uint64_t seed = 1;
   int threads = 0;              // 0 = all cores (libtorch intra-op threads)
   bool progress = true;

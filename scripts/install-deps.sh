@@ -17,7 +17,9 @@ PACKAGES=(
   blender colmap
   # the benchmark suite workflow (workflow/Snakefile)
   snakemake
-  # reference checks (scikit-image SSIM reference values, plots)
+  # photographs for the lens-drop detector's training crops (scripts/make-training-data.sh)
+  mate-backgrounds
+  # reference checks (scikit-image SSIM reference values, plots; its sample photos are training crops too)
   python3-numpy python3-skimage python3-matplotlib
 )
 

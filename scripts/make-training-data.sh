@@ -4,6 +4,10 @@
 # then re-weathered with WEATHERS specs each. The specs are a fixed table walked by the index k, so the
 # set is deterministic from its seeds (weather seed = 1000 * scene index + k). Existing outputs are kept
 # (the set is a cache: delete OUT to rebuild). Prints its size and time; writes OUT/manifest.json.
+# Crop variety for the lens-drop detector: PHOTO_WEATHERS (default 4) weathers of each photograph in
+# PHOTOS below (Debian's mate-backgrounds nature photos without its RainDrops image, and four of
+# scikit-image's sample photos), made clear datasets by `weathergs photo-scene` (synthetic depth),
+# as photo_<name>_wNN. They train the LED only (scripts/train-models.sh).
 #
 #   scripts/make-training-data.sh BUILD/apps/weathergs OUT [WEATHERS=12] [PROFILE=quick]
 set -euo pipefail
@@ -13,6 +17,16 @@ WEATHERS=${3:-12}
 PROFILE=${4:-quick}
 HERE=$(cd "$(dirname "$0")/.." && pwd)
 SCENES=(park parking_lot harbour market)
+PHOTO_WEATHERS=${PHOTO_WEATHERS:-4}
+MATE=/usr/share/backgrounds/mate/nature
+SKIMAGE=/usr/lib/python3/dist-packages/skimage/data
+PHOTOS=("$MATE/Aqua.jpg" "$MATE/Blinds.jpg" "$MATE/Dune.jpg" "$MATE/FreshFlower.jpg" "$MATE/Garden.jpg"
+        "$MATE/GreenMeadow.jpg" "$MATE/LadyBird.jpg" "$MATE/Storm.jpg" "$MATE/TwoWings.jpg" "$MATE/Wood.jpg"
+        "$MATE/YellowFlower.jpg" "$SKIMAGE/astronaut.png" "$SKIMAGE/chelsea.png" "$SKIMAGE/coffee.png"
+        "$SKIMAGE/motorcycle_left.png")
+for p in "${PHOTOS[@]}"; do
+  if [ ! -f "$p" ]; then echo "make-training-data: photograph $p not found (run scripts/install-deps.sh)" >&2; exit 2; fi
+done
 mkdir -p "$OUT/clear" "$OUT/specs"
 start=$(date +%s)
 
@@ -47,14 +61,9 @@ spec_for() {  # scene_index k -> JSON on stdout
   echo "{\"seed\": $((1000 * si + k)), \"style\": \"$style\", \"effects\": {$fx}}"
 }
 
-for si in "${!SCENES[@]}"; do
-  scene=${SCENES[$si]}
-  if [ ! -f "$OUT/clear/$scene/dataset.json" ]; then
-    echo "== render $scene (clear, $PROFILE)"
-    "$BIN" --quiet generate --scene "$HERE/scenes/training/$scene.json" --weather clear --profile "$PROFILE" \
-      --no-colmap --out "$OUT/clear/$scene"
-  fi
-  for k in $(seq 0 $((WEATHERS - 1))); do
+weather_all() {  # clear dataset name, scene index in the table, number of weathers
+  local scene=$1 si=$2 n=$3 k name
+  for k in $(seq 0 $((n - 1))); do
     name=$(printf "%s_w%02d" "$scene" "$k")
     [ -f "$OUT/$name/dataset.json" ] && continue
     spec_for "$si" "$k" > "$OUT/specs/$name.json"
@@ -62,6 +71,29 @@ for si in "${!SCENES[@]}"; do
     "$BIN" --quiet weather --in "$OUT/clear/$scene" --spec "$OUT/specs/$name.json" --out "$OUT/$name" \
       --targets --no-manifest --no-layers
   done
+}
+
+for si in "${!SCENES[@]}"; do
+  scene=${SCENES[$si]}
+  if [ ! -f "$OUT/clear/$scene/dataset.json" ]; then
+    echo "== render $scene (clear, $PROFILE)"
+    "$BIN" --quiet generate --scene "$HERE/scenes/training/$scene.json" --weather clear --profile "$PROFILE" \
+      --no-colmap --out "$OUT/clear/$scene"
+  fi
+  weather_all "$scene" "$si" "$WEATHERS"
+done
+
+# Photographs: a 16-view pan at the profile's size, then PHOTO_WEATHERS weathers (scene index 4 + i
+# in the weather table, so their mixes differ from the scenes').
+size=$( [ "$PROFILE" = quick ] && echo "--width 300 --height 200" || echo "--width 600 --height 400" )
+for pi in "${!PHOTOS[@]}"; do
+  photo=${PHOTOS[$pi]}
+  stem=$(basename "${photo%.*}" | tr 'A-Z' 'a-z')
+  scene="photo_$stem"
+  if [ ! -f "$OUT/clear/$scene/dataset.json" ]; then
+    "$BIN" --quiet photo-scene --photo "$photo" $size --out "$OUT/clear/$scene" > /dev/null
+  fi
+  weather_all "$scene" "$((4 + pi))" "$PHOTO_WEATHERS"
 done
 
 seconds=$(( $(date +%s) - start ))
@@ -70,7 +102,7 @@ views=$(find "$OUT" -path "$OUT/clear" -prune -o -path "*/images/*.png" -print |
 size=$(du -sm "$OUT" | cut -f1)
 cat > "$OUT/manifest.json" <<EOF
 {"format": "weathergs-training-set", "scenes": ["park", "parking_lot", "harbour", "market"], "profile": "$PROFILE",
- "weathers_per_scene": $WEATHERS, "datasets": $datasets, "views": $views, "size_mb": $size,
+ "weathers_per_scene": $WEATHERS, "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "datasets": $datasets, "views": $views, "size_mb": $size,
  "seconds_this_run": $seconds, "recipe": "scripts/make-training-data.sh"}
 EOF
 echo "training set: $datasets datasets, $views views, $size MB in $OUT ($seconds s this run)"

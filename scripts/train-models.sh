@@ -1,9 +1,13 @@
 #!/usr/bin/env bash
 # Retrains every weight file this project ships (models/README.md) from the training set of
-# scripts/make-training-data.sh: `make models`. The last weather of each training scene (*_w11 with the
-# default 12) is held out for the calibration and the reported metrics; everything else trains. The
-# learned AEF and its selector also hold out one whole scene (market), so that the selector's theta and
-# the held-out PSNRs are measured on a scene the networks never saw.
+# scripts/make-training-data.sh: `make models`. Held out, never trained on:
+# - LED: one whole training scene (LED_HELD_SCENE, default market): its weathers with drops calibrate
+#   the threshold and give the reported metrics, so both are measured on a scene the network never saw
+#   (the benchmark's scenes are unseen too). The photograph datasets (photo_*_wNN, crop variety) train
+#   the LED and nothing else: their particles fall on a synthetic depth.
+# - AEF and selector: the last weather of each training scene (*_w11 with the default 12) and the whole
+#   market scene, so that the selector's theta and the held-out PSNRs come from a scene the networks
+#   never saw.
 #
 #   scripts/train-models.sh BUILD/apps/weathergs TRAINING_DATA OUT_MODELS_DIR [ITERATIONS]
 #   ONLY=led|aef|selector (environment): retrain only those weights (default: all; aef = the two
@@ -13,19 +17,24 @@ BIN=${1:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
 DATA=${2:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
 OUT=${3:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
 ITERATIONS=${4:-3000}
-train=() held=()
+LED_WIDTH=${LED_WIDTH:-96}      # the LED's internal width (docs/restoration.md)
+LED_JITTER=${LED_JITTER:-0}     # its colour jitter
+LED_HELD_SCENE=${LED_HELD_SCENE:-market}
+train=() held=() held_last=()
 for d in "$DATA"/*_w[0-9][0-9]; do
   [ -f "$d/dataset.json" ] || continue
+  name=$(basename "$d")
   last=$(ls -d "${d%_w*}"_w[0-9][0-9] | sort | tail -1)
-  if [ "$d" = "$last" ]; then held+=("$d"); else train+=("$d"); fi
+  case $name in photo_*) ;; *) [ "$d" = "$last" ] && held_last+=("$d") ;; esac
+  if [ "${name%_w[0-9][0-9]}" = "$LED_HELD_SCENE" ]; then held+=("$d"); else train+=("$d"); fi
 done
-if [ ${#train[@]} -eq 0 ]; then echo "train-models: no training datasets in $DATA (run make training-data)" >&2; exit 2; fi
+if [ ${#train[@]} -eq 0 ] || [ ${#held[@]} -eq 0 ]; then echo "train-models: no training datasets in $DATA or no scene $LED_HELD_SCENE (run make training-data)" >&2; exit 2; fi
 ONLY=${ONLY:-all}
 if [ "$ONLY" = all ] || [ "$ONLY" = led ]; then
   mkdir -p "$OUT/led"
   echo "train-models: LED on ${#train[@]} datasets, calibrated on ${#held[@]} held out"
   "$BIN" --threads 1 train-led --data "${train[@]}" --held-out "${held[@]}" --out "$OUT/led/led" \
-    --iterations "$ITERATIONS" --seed 1 --threads 1
+    --iterations "$ITERATIONS" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --seed 1 --threads 1
 fi
 
 # The learned AEF (derain, desnow) and the weather selector (docs/restoration.md). The clear renders
@@ -37,7 +46,8 @@ aef_train=() aef_held=()
 for d in "$DATA"/*_w[0-9][0-9] "$DATA"/clear/*; do
   [ -f "$d/dataset.json" ] || continue
   name=$(basename "$d")
-  if [ "${name%_w[0-9][0-9]}" = "$AEF_HELD_SCENE" ] || [[ " ${held[*]} " == *" $d "* ]]; then aef_held+=("$d"); else aef_train+=("$d"); fi
+  case $name in photo_*) continue ;; esac
+  if [ "${name%_w[0-9][0-9]}" = "$AEF_HELD_SCENE" ] || [[ " ${held_last[*]} " == *" $d "* ]]; then aef_held+=("$d"); else aef_train+=("$d"); fi
 done
 mkdir -p "$OUT/aef"
 if [ "$ONLY" = all ] || [ "$ONLY" = aef ]; then

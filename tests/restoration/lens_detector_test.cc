@@ -116,6 +116,19 @@ TEST(LensDetectorTest, TrainingWithOneThreadIsReproducible) {
     led.save(tmp / stem, Json::object());
   }
   EXPECT_EQ(read_file(tmp / "a.bin"), read_file(tmp / "b.bin"));
+  // The colour jitter draws from the same (seed, iteration) stream: reproducible too, and it changes
+  // the run (it is applied).
+  o.colour_jitter = 0.3;
+  for (const char* stem : {"c", "d"}) {
+    LensDetector led(tiny_arch(), 3);
+    led.train(set, o);
+    led.save(tmp / stem, Json::object());
+  }
+  EXPECT_EQ(read_file(tmp / "c.bin"), read_file(tmp / "d.bin"));
+  EXPECT_NE(read_file(tmp / "a.bin"), read_file(tmp / "c.bin"));
+  o.colour_jitter = 0.6;
+  LensDetector led(tiny_arch(), 3);
+  EXPECT_THROW(led.train(set, o), InputError);
 }
 
 TEST(LensDetectorTest, SaveLoadRoundTripAndThreadCountInvariance) {
