@@ -23,7 +23,7 @@ inline constexpr int kLedFormatVersion = 1;
 
 struct LedArchitecture {
   int steps = 4;           // recurrent steps (the paper's N)
-  int width = 96;          // internal width in pixels; the height follows the view's aspect ratio
+  int width = 144;         // internal width in pixels; the height follows the view's aspect ratio
   int channels = 16;       // feature channels after the strided conv (and of the ConvLSTM state)
   int residual_blocks = 3; // dilations 1, 2, 4, ... (the receptive field must cover a defocused drop)
   void validate() const;   // InputError naming the field
@@ -33,13 +33,13 @@ struct LedArchitecture {
 
 struct LedTrainOptions {
   LedArchitecture arch;
-  int iterations = 3000;
+  int iterations = 4500;
   int batch = 4;
   double learning_rate = 2e-3;  // Adam; cosine-decayed to 5% over the run
   double theta = 0.8;           // weight of step t is theta^(N-t)
   // Photometric augmentation, in [0, 0.5]: each drawn example's RGB channels are scaled by gains
   // uniform in [1 - j, 1 + j], times an overall gain from the same range that also scales the
-  // sharpness channel (values clamped to [0, 1]). 0 = off (no draws: the run of an older version).
+  // sharpness channel (values clamped to [0, 1]). 0 = off (no draws), as for the shipped LED.
   double colour_jitter = 0;
   uint64_t seed = 1;
   int threads = 0;              // 0 = all cores (libtorch intra-op threads)

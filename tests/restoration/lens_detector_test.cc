@@ -108,6 +108,7 @@ TEST(LensDetectorTest, TrainingWithOneThreadIsReproducible) {
   o.iterations = 20;
   o.batch = 2;
   o.threads = 1;
+  o.colour_jitter = 0;
   o.progress = false;
   testing::TempDir tmp;
   for (const char* stem : {"a", "b"}) {
