@@ -1,5 +1,6 @@
 #include "core/dataset.h"
 
+#include <cstdio>
 #include <filesystem>
 #include <set>
 
@@ -72,6 +73,12 @@ std::map<std::string, std::vector<std::string>> llff_splits(const std::vector<st
   std::map<std::string, std::vector<std::string>> s{{"train", {}}, {"test", {}}};
   for (size_t i = 0; i < views.size(); ++i) s[i % size_t(every) == 0 ? "test" : "train"].push_back(views[i]);
   return s;
+}
+
+std::string numbered_view_name(int index, int digits) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%0*d", digits, index);
+  return buf;
 }
 
 bool is_safe_view_name(const std::string& name) {

@@ -54,6 +54,8 @@ std::map<std::string, std::vector<std::string>> llff_splits(const std::vector<st
 
 // View names must be file-system safe: [A-Za-z0-9._-]+, not starting with '.'.
 bool is_safe_view_name(const std::string& name);
+// The name of the index-th view of a numbered sequence, zero-padded: (7, 3) -> "007".
+std::string numbered_view_name(int index, int digits = 3);
 
 Dataset read_dataset(const std::string& root);
 std::vector<Camera> read_cameras_json(const std::string& path);

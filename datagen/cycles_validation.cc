@@ -181,6 +181,13 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
 
   std::vector<ManifestParticle> particles;
   std::vector<std::string> species_present;
+  // Seconds of the last generator stage of this name (the weather's own, after any earlier runs).
+  auto stage_seconds = [&gen](const std::string& name) {
+    double last = 0;
+    for (const auto& st : gen.at("stages"))
+      if (st.value("name", "") == name) last = st.value("seconds", 0.0);
+    return last;
+  };
   Json items = Json::array();
   double weather_seconds = 0;
   for (const char* species : {"rain", "snow"}) {
@@ -196,10 +203,7 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
                        {"v_world", {p.v_world.x(), p.v_world.y(), p.v_world.z()}}});
     }
     // The latest run of the stage (a dataset re-weathered by `weathergs weather` lists earlier runs too).
-    double last = 0;
-    for (const auto& st : gen.at("stages"))
-      if (st.value("name", "") == species) last = st.value("seconds", 0.0);
-    weather_seconds += last;
+    weather_seconds += stage_seconds(species);
   }
   Json lens_job;
   if (lens) {
@@ -215,10 +219,7 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
                            {"sphere_radius_m", 1e-3 * d.at("sphere_radius_mm").get<double>()},
                            {"contact_angle_deg", d.at("contact_angle_deg")}});
     lens_job = {{"refractive_index", spec.at("refractive_index")}, {"drops", items}};
-    double last = 0;
-    for (const auto& st : gen.at("stages"))
-      if (st.value("name", "") == "lens_droplets") last = st.value("seconds", 0.0);
-    weather_seconds = last;
+    weather_seconds = stage_seconds("lens_droplets");
   }
   if (items.empty()) throw InputError(o.dataset, "no particles or lens drops recorded for view " + o.view);
 

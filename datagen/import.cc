@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
@@ -41,12 +40,6 @@ cv::Mat limit_size(const cv::Mat& img, int max_size) {
   return out;
 }
 
-std::string view_name(int k) {
-  char buf[16];
-  std::snprintf(buf, sizeof(buf), "%05d", k);
-  return buf;
-}
-
 struct Keyframe {
   std::string name;
   double time_s = 0;
@@ -72,7 +65,7 @@ ImportSummary import_footage(const ImportOptions& o, const std::string& out_dir)
       throw InputError(origin, "all frames must have one size (" + std::to_string(size.width) + "x" +
                                    std::to_string(size.height) + "), got " + std::to_string(img.cols) + "x" +
                                    std::to_string(img.rows));
-    Keyframe k{view_name(int(keys.size())), time_s, origin};
+    Keyframe k{numbered_view_name(int(keys.size()), 5), time_s, origin};
     if (!cv::imwrite((frames / (k.name + ".png")).string(), img))
       throw InputError((frames / (k.name + ".png")).string(), "cannot write keyframe");
     keys.push_back(k);

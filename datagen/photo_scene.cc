@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/atomic_file.h"
+#include "core/constants.h"
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/sha256.h"
@@ -17,16 +18,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 void require_positive(double v, const char* name) {
   if (!(std::isfinite(v) && v > 0)) throw InputError("photo-scene options", std::string(name) + " must be a finite number > 0, got " + std::to_string(v));
-}
-
-std::string view_name(int k) {
-  char buf[16];
-  std::snprintf(buf, sizeof(buf), "%03d", k);
-  return buf;
 }
 
 // A level camera at `center` turned by `yaw` about world +z (yaw 0 looks along world +y); OpenCV axes.
@@ -105,7 +98,7 @@ PhotoSceneSummary make_photo_scene(const PhotoSceneOptions& o, const std::string
     if (i == 0) first_yaw = yaw;
     last_yaw = yaw;
     Camera c;
-    c.name = view_name(i);
+    c.name = numbered_view_name(i);
     c.width = o.width;
     c.height = o.height;
     c.fx = c.fy = fx;

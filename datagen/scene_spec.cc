@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "core/constants.h"
+#include "core/dataset.h"
 #include "core/error.h"
 #include "datagen/scene_types.h"
 
@@ -294,9 +295,7 @@ std::vector<Camera> scene_cameras(const SceneSpec& scene, const ProfileSpec& pro
     const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();
     const Eigen::Vector3d y = z.cross(x);
     Camera cam;
-    char name[16];
-    std::snprintf(name, sizeof(name), "%03d", k);
-    cam.name = name;
+    cam.name = numbered_view_name(k);
     cam.width = profile.width;
     cam.height = profile.height;
     cam.fx = cam.fy = f_px;

@@ -157,6 +157,13 @@ TEST(DatasetTest, UnsafeViewNamesRejected) {
   EXPECT_FALSE(is_safe_view_name(""));
 }
 
+TEST(DatasetTest, NumberedViewNames) {
+  EXPECT_EQ(numbered_view_name(7), "007");
+  EXPECT_EQ(numbered_view_name(12, 5), "00012");
+  EXPECT_EQ(numbered_view_name(1234), "1234");  // wider than the padding: all digits kept
+  EXPECT_TRUE(is_safe_view_name(numbered_view_name(0)));
+}
+
 }  // namespace
 }  // namespace weathergs
 

@@ -79,7 +79,9 @@ TEST(PhotoSceneTest, ViewsAreCropsOfAPanAndTheDepthIsAGroundPlane) {
   for (int v : {41, 50, 79}) {
     const double z = 1.6 * fx / (v + 0.5 - 40);
     EXPECT_NEAR(depth.at(60, v), std::min(30.0, z), 1e-4 * z);
-    if (z < 30) EXPECT_NEAR(ds.cameras[4].unproject({37.5, v + 0.5}, depth.at(37, v)).z(), 0, 1e-4) << "row " << v;
+    if (z < 30) {
+      EXPECT_NEAR(ds.cameras[4].unproject({37.5, v + 0.5}, depth.at(37, v)).z(), 0, 1e-4) << "row " << v;
+    }
   }
 
   // Deterministic: the same options give the same bytes.
