@@ -166,31 +166,41 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     }
 }
 
-// kBackground: the background is not black. With a black one its term of dL/dalpha is exactly
-// zero and is left out (a zero of either sign added to a sum never changes its bits).
+// The backward replay, back to front per pixel. Per pixel it keeps the transmittance (recovered
+// from the final one as T_k = T_(k+1) / (1 - alpha_k)) and one scalar, S.d: the dot product of dL/dpixel
+// with the colour the entries behind the current one contributed (gsplat's front-colour buffer,
+// in its scalar form since dL/dpixel is fixed per pixel). Then
+//   dL/dalpha_k = (c_k.d) T_k - (S.d) / (1 - alpha_k)  [- T_final / (1 - alpha_k) bg.d],
+// equal to the reference's (c_k - accum_rec) . d T_k recursion over 7 per-pixel arrays. The
+// per-entry sums collect, per pixel, v_power dx, v_power dy, v_power dx^2, v_power dx dy, v_power dy^2
+// (v_power = dL/dpower), gauss v_alpha and w d; the conic and opacity factors are applied once per
+// entry. They go to an 8-lane accumulator that receives the 8-pixel groups of each row in column order,
+// rows top to bottom (the 4-lane kernel feeds its two halves): the same additions at either width.
+// Pixels a group covers outside the Gaussian's span add only zeros of either sign (never -0 into +0
+// that would flip it: a sum that starts at +0 stays +0 under +-0), so skipped rows change no bits.
+// kBackground: the background is not black; with a black one its term is exactly zero and left out.
 template <int W, bool kBackground>
 WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, RasterState<float>* s,
                                      const std::vector<float>& v_image, int64_t t) {
   using vf = typename Lanes<W>::f;
   using vi = typename Lanes<W>::i;
   using v4f = typename Lanes<4>::f;
+  using v8f = typename Lanes<8>::f;
+  constexpr int kSums = kEntryGrads;
   const int x0 = int(t % s->tiles_x) * kTileSize, y0 = int(t / s->tiles_x) * kTileSize;
   const int x1 = std::min(s->width, x0 + kTileSize), y1 = std::min(s->height, y0 + kTileSize);
-  alignas(64) float trans[kTilePixels], t_final[kTilePixels], acc_r[kTilePixels], acc_g[kTilePixels],
-      acc_b[kTilePixels], last_r[kTilePixels], last_g[kTilePixels], last_b[kTilePixels], last_alpha[kTilePixels],
-      d_r[kTilePixels], d_g[kTilePixels], d_b[kTilePixels], bg_dot[kTilePixels];
+  alignas(64) float trans[kTilePixels], t_final[kTilePixels], sd[kTilePixels], d_r[kTilePixels], d_g[kTilePixels],
+      d_b[kTilePixels], bg_dot[kTilePixels];
   alignas(64) int32_t last[kTilePixels];
   for (int p = 0; p < kTilePixels; ++p) {
     trans[p] = t_final[p] = 1.f;
-    acc_r[p] = acc_g[p] = acc_b[p] = last_r[p] = last_g[p] = last_b[p] = last_alpha[p] = 0.f;
-    d_r[p] = d_g[p] = d_b[p] = bg_dot[p] = 0.f;
+    sd[p] = d_r[p] = d_g[p] = d_b[p] = bg_dot[p] = 0.f;
     last[p] = 0;  // outside the image: no contributor, never replayed
   }
   const std::array<float, 3>& bg = settings.background;
   int32_t kmax = 0;
   // Per tile row, the largest contributor count: entries at or past it change no pixel of the row
-  // and add only zeros to the sums (never -0: a sum that starts at +0 stays +0 under +-0), so the
-  // row is skipped with the same bits.
+  // and add only zeros to the sums, so the row is skipped with the same bits.
   int32_t row_last[kTileSize] = {};
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) {
@@ -228,12 +238,41 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
     const vf mx = splat<vf>(sp[0]), ca = splat<vf>(sp[2]), cb = splat<vf>(sp[3]), cc = splat<vf>(sp[4]);
     const vf o = splat<vf>(sp[5]), cr = splat<vf>(sp[6]), cg = splat<vf>(sp[7]), cbl = splat<vf>(sp[8]);
     const vi kv = vi{} + k;
-    // The per-entry sums in one 4-lane accumulator that receives the 4-pixel groups of each row in
-    // column order, rows top to bottom: exactly the additions of W = 4, whatever W is. Groups that
-    // W = 4 does not visit (left of the 4-aligned start of the row's span, or past its end) hold
-    // only zeros of either sign and are skipped, so the bits do not depend on W.
-    v4f acc[kEntryGrads];
-    for (int j = 0; j < kEntryGrads; ++j) acc[j] = v4f{};
+    v8f acc[kSums];
+    for (int j = 0; j < kSums; ++j) acc[j] = v8f{};
+    // One W-pixel block at column bx of the tile: updates the pixels' state and writes its 9 terms.
+    auto block = [&](int p, int bx, vf dy, vf* out) __attribute__((always_inline)) {
+      const vf dx = mx - (lane_center + float(bx));
+      const vf power = -0.5f * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
+      const vf gauss = blend_exp_v<W>(vmin(power, zero));
+      const vf alpha_raw = o * gauss;
+      const vf alpha = vmin(alpha_max, alpha_raw);
+      const vi ok = (kv < load<vi>(&last[p])) & (power <= 0.f) & (alpha >= float(kAlphaMin));
+      const vf inv = 1.f / (1.f - alpha);
+      const vf tr = load<vf>(&trans[p]);
+      const vf tp = ok ? tr * inv : tr;
+      store(&trans[p], tp);
+      const vf dr = load<vf>(&d_r[p]), dg = load<vf>(&d_g[p]), db = load<vf>(&d_b[p]);
+      const vf cd = cr * dr + cg * dg + cbl * db;
+      const vf behind = load<vf>(&sd[p]);
+      vf v_alpha = cd * tp - behind * inv;
+      if constexpr (kBackground) v_alpha -= load<vf>(&t_final[p]) * inv * load<vf>(&bg_dot[p]);
+      const vf wc = ok ? alpha * tp : zero;
+      store(&sd[p], behind + cd * wc);
+      // A clamped alpha (o G > 0.99) is flat in opacity and position.
+      const vf va = (ok & (alpha_raw <= alpha_max)) ? v_alpha : zero;
+      const vf v_power = o * va * gauss;
+      const vf gx = v_power * dx, gy = v_power * dy;
+      out[0] = gx;
+      out[1] = gy;
+      out[2] = gx * dx;
+      out[3] = gx * dy;
+      out[4] = gy * dy;
+      out[5] = gauss * va;
+      out[6] = wc * dr;
+      out[7] = wc * dg;
+      out[8] = wc * db;
+    };
     const float inv_ca = 1.f / sp[2];
     for (int py = py0; py <= py1; ++py) {
       if (k >= row_last[py - y0]) continue;
@@ -242,58 +281,34 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
       int rx0 = px0, rx1 = px1;
       row_span(sp, inv_ca, py, &rx0, &rx1);
       if (rx0 > rx1) continue;
-      const int first_group = ((rx0 - x0) / 4) * 4;
-      const int bx0 = ((rx0 - x0) / W) * W, bx1 = rx1 - x0;
+      const int gx0 = ((rx0 - x0) / 8) * 8, gx1 = rx1 - x0;
       const vf dy = splat<vf>(sp[1] - (float(py) + 0.5f));
       const int row = (py - y0) * kTileSize;
-      for (int bx = bx0; bx <= bx1; bx += W) {
-        const int p = row + bx;
-        const vf dx = mx - (lane_center + float(bx));
-        const vf power = -0.5f * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
-        const vf gauss = blend_exp_v<W>(vmin(power, zero));
-        const vf alpha_raw = o * gauss;
-        const vf alpha = vmin(alpha_max, alpha_raw);
-        const vi ok = (kv < load<vi>(&last[p])) & (power <= 0.f) & (alpha >= float(kAlphaMin));
-        const vf one_minus = 1.f - alpha;
-        const vf tr = load<vf>(&trans[p]);
-        const vf tp = ok ? tr / one_minus : tr;
-        store(&trans[p], tp);
-        const vf w = alpha * tp;
-        const vf la = load<vf>(&last_alpha[p]);
-        const vf ar = la * load<vf>(&last_r[p]) + (1.f - la) * load<vf>(&acc_r[p]);
-        const vf ag = la * load<vf>(&last_g[p]) + (1.f - la) * load<vf>(&acc_g[p]);
-        const vf ab = la * load<vf>(&last_b[p]) + (1.f - la) * load<vf>(&acc_b[p]);
-        const vf dr = load<vf>(&d_r[p]), dg = load<vf>(&d_g[p]), db = load<vf>(&d_b[p]);
-        vf v_alpha = ((cr - ar) * dr + (cg - ag) * dg + (cbl - ab) * db) * tp;
-        if constexpr (kBackground) v_alpha += -load<vf>(&t_final[p]) / one_minus * load<vf>(&bg_dot[p]);
-        store(&acc_r[p], ok ? ar : load<vf>(&acc_r[p]));
-        store(&acc_g[p], ok ? ag : load<vf>(&acc_g[p]));
-        store(&acc_b[p], ok ? ab : load<vf>(&acc_b[p]));
-        store(&last_r[p], ok ? cr : load<vf>(&last_r[p]));
-        store(&last_g[p], ok ? cg : load<vf>(&last_g[p]));
-        store(&last_b[p], ok ? cbl : load<vf>(&last_b[p]));
-        store(&last_alpha[p], ok ? alpha : la);
-        const vf wc = ok ? w : zero;
-        const vf va = (ok & (alpha_raw <= alpha_max)) ? v_alpha : zero;
-        const vf v_power = o * va * gauss;
-        const vf grads[kEntryGrads] = {v_power * -(ca * dx + cb * dy), v_power * -(cc * dy + cb * dx),
-                                       v_power * -0.5f * dx * dx,      v_power * -dx * dy,
-                                       v_power * -0.5f * dy * dy,      gauss * va,
-                                       wc * dr,                        wc * dg,
-                                       wc * db};
-        for (int grp = 0; grp < W / 4; ++grp) {
-          const int col = bx + 4 * grp;
-          if (col < first_group || col > bx1) continue;
-          for (int j = 0; j < kEntryGrads; ++j) {
-            v4f part;
-            std::memcpy(&part, reinterpret_cast<const float*>(&grads[j]) + 4 * grp, sizeof(v4f));
-            acc[j] += part;
-          }
+      for (int bx = gx0; bx <= gx1; bx += 8) {
+        if constexpr (W == 8) {
+          vf g[kSums];
+          block(row + bx, bx, dy, g);
+          for (int j = 0; j < kSums; ++j) acc[j] += g[j];
+        } else {
+          vf lo[kSums], hi[kSums];
+          block(row + bx, bx, dy, lo);
+          block(row + bx + 4, bx + 4, dy, hi);
+          for (int j = 0; j < kSums; ++j) acc[j] += __builtin_shufflevector(lo[j], hi[j], 0, 1, 2, 3, 4, 5, 6, 7);
         }
       }
     }
+    float sum[kSums];
+    for (int j = 0; j < kSums; ++j) {
+      const v4f half = __builtin_shufflevector(acc[j], acc[j], 0, 1, 2, 3) + __builtin_shufflevector(acc[j], acc[j], 4, 5, 6, 7);
+      sum[j] = hsum4(half);
+    }
     float* eg = slot(k);
-    for (int j = 0; j < kEntryGrads; ++j) eg[j] = hsum4(acc[j]);
+    eg[0] = -(sp[2] * sum[0] + sp[3] * sum[1]);
+    eg[1] = -(sp[4] * sum[1] + sp[3] * sum[0]);
+    eg[2] = -0.5f * sum[2];
+    eg[3] = -sum[3];
+    eg[4] = -0.5f * sum[4];
+    for (int j = 5; j < kSums; ++j) eg[j] = sum[j];
   }
 }
 

@@ -220,7 +220,15 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   // row-major order: entry_slot), and copies the records into depth order.
   parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
     int64_t* cursor = &start[size_t(c) * num_tiles];
+    constexpr int64_t kPrefetch = 16;  // the records are gathered in depth order: fetch ahead
     for (int64_t rank = lo; rank < hi; ++rank) {
+      if (rank + kPrefetch < hi) {
+        const int64_t ahead = int64_t((*keys)[rank + kPrefetch] & 0xffffffffu);
+        __builtin_prefetch(&s->splat[ahead * kSplatFloats]);
+        __builtin_prefetch(&s->splat[ahead * kSplatFloats + kSplatFloats - 1]);
+        __builtin_prefetch(&s->rect[ahead * 4]);
+        __builtin_prefetch(&s->entry_offset[ahead]);
+      }
       const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
       int64_t j = s->entry_offset[gi];
       for_each_tile(gi, [&](int t) {
@@ -229,7 +237,9 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
         s->tile_rank[k] = int32_t(rank);
         s->entry_slot[k] = j++;
       });
-      std::copy_n(&s->splat[int64_t(gi) * kSplatFloats], kSplatFloats, &s->splat_sorted[rank * kSplatFloats]);
+      const T* from = &s->splat[int64_t(gi) * kSplatFloats];
+      T* to = &s->splat_sorted[rank * kSplatFloats];
+      for (int f = 0; f < kSplatFloats; ++f) to[f] = from[f];
     }
   });
 }
@@ -353,11 +363,11 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
   s->entry_grad.resize(size_t(s->num_entries()) * kEntryGrads);
   const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax);
   const std::array<T, 3> bg = settings.background;
-  (void)alpha_min;
 
-  // 1. Per tile: replay each pixel's blend back to front, one gradient slot per entry. Per-pixel
-  // state is planar and the per-Gaussian sums go to one lane per tile column (summed in column
-  // order afterwards), so the row loop is branch-free and vectorizes.
+  // 1. Per tile: replay each pixel's blend back to front, one gradient slot per entry. The float
+  // kernels (raster_simd.cc, backward_tile) hold the derivation; this is the same arithmetic one pixel
+  // at a time (it serves double, for the finite-difference tests), with per-entry sums in row-major
+  // pixel order.
   parallel_for(0, num_tiles, [&](int64_t t) {
     if constexpr (std::is_same_v<T, float>) {
       backward_tile_simd(settings, s, v_image, t);
@@ -365,15 +375,13 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
     }
     const int x0 = int(t % s->tiles_x) * kTileSize, y0 = int(t / s->tiles_x) * kTileSize;
     const int x1 = std::min(s->width, x0 + kTileSize), y1 = std::min(s->height, y0 + kTileSize);
-    alignas(64) T trans[kTilePixels], t_final[kTilePixels], acc_r[kTilePixels], acc_g[kTilePixels],
-        acc_b[kTilePixels], last_r[kTilePixels], last_g[kTilePixels], last_b[kTilePixels],
-        last_alpha[kTilePixels], d_r[kTilePixels], d_g[kTilePixels], d_b[kTilePixels], bg_dot[kTilePixels];
+    alignas(64) T trans[kTilePixels], t_final[kTilePixels], sd[kTilePixels], d_r[kTilePixels], d_g[kTilePixels],
+        d_b[kTilePixels], bg_dot[kTilePixels];
     alignas(64) int32_t last[kTilePixels];
     int32_t kmax = 0;
     for (int p = 0; p < kTilePixels; ++p) {
       trans[p] = t_final[p] = T(1);
-      acc_r[p] = acc_g[p] = acc_b[p] = last_r[p] = last_g[p] = last_b[p] = last_alpha[p] = T(0);
-      d_r[p] = d_g[p] = d_b[p] = bg_dot[p] = T(0);
+      sd[p] = d_r[p] = d_g[p] = d_b[p] = bg_dot[p] = T(0);
       last[p] = 0;
     }
     for (int y = y0; y < y1; ++y)
@@ -392,7 +400,6 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
     // Sums go to each entry's slot in the per-Gaussian order; entries not replayed get zeros.
     auto slot = [&](int64_t k) { return &s->entry_grad[s->entry_slot[begin + k] * kEntryGrads]; };
     for (int64_t k = kmax; k < end - begin; ++k) std::fill_n(slot(k), kEntryGrads, T(0));
-    alignas(64) T lane[kEntryGrads][kTileSize];
     for (int32_t k = kmax - 1; k >= 0; --k) {
       const T* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
       if (sp[9] < T(0)) {
@@ -404,62 +411,48 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
       int px0, px1, py0, py1;
       pixel_range(mx, sp[9], x0, x1 - 1, &px0, &px1);
       pixel_range(my, sp[10], y0, y1 - 1, &py0, &py1);
-      if (px0 > px1 || py0 > py1) {
-        std::fill_n(slot(k), kEntryGrads, T(0));
-        continue;
-      }
-      for (int j = 0; j < kEntryGrads; ++j)
-        for (int c = 0; c < kTileSize; ++c) lane[j][c] = T(0);
+      T sum[kEntryGrads] = {};
       for (int py = py0; py <= py1; ++py) {
         const T dy = my - (T(py) + T(0.5));
         const int row = (py - y0) * kTileSize - x0;
         for (int px = px0; px <= px1; ++px) {
           const int p = row + px;
-          const int l = px - x0;
           const T dx = mx - (T(px) + T(0.5));
           const T power = splat_power(ca, cb, cc, dx, dy);
           const T gauss = blend_exp(std::min(power, T(0)));
           const T alpha_raw = o * gauss;
           const T alpha = std::min(alpha_max, alpha_raw);
           const bool ok = (k < last[p]) & (power <= T(0)) & (alpha >= alpha_min);
-          const T one_minus = T(1) - alpha;
-          const T tp = ok ? trans[p] / one_minus : trans[p];
+          if (!ok) continue;
+          const T inv = T(1) / (T(1) - alpha);
+          const T tp = trans[p] * inv;
           trans[p] = tp;
+          const T cd = cr * d_r[p] + cg * d_g[p] + cbl * d_b[p];
+          T v_alpha = cd * tp - sd[p] * inv;
+          v_alpha -= t_final[p] * inv * bg_dot[p];
           const T w = alpha * tp;
-          const T la = last_alpha[p];
-          const T ar = la * last_r[p] + (T(1) - la) * acc_r[p];
-          const T ag = la * last_g[p] + (T(1) - la) * acc_g[p];
-          const T ab = la * last_b[p] + (T(1) - la) * acc_b[p];
-          T v_alpha = ((cr - ar) * d_r[p] + (cg - ag) * d_g[p] + (cbl - ab) * d_b[p]) * tp;
-          v_alpha += -t_final[p] / one_minus * bg_dot[p];
-          acc_r[p] = ok ? ar : acc_r[p];
-          acc_g[p] = ok ? ag : acc_g[p];
-          acc_b[p] = ok ? ab : acc_b[p];
-          last_r[p] = ok ? cr : last_r[p];
-          last_g[p] = ok ? cg : last_g[p];
-          last_b[p] = ok ? cbl : last_b[p];
-          last_alpha[p] = ok ? alpha : la;
-          const T wc = ok ? w : T(0);
-          lane[6][l] += wc * d_r[p];
-          lane[7][l] += wc * d_g[p];
-          lane[8][l] += wc * d_b[p];
+          sd[p] += cd * w;
           // A clamped alpha (o G > 0.99) is flat in opacity and position.
-          const T va = (ok & (alpha_raw <= alpha_max)) ? v_alpha : T(0);
+          const T va = alpha_raw <= alpha_max ? v_alpha : T(0);
           const T v_power = o * va * gauss;
-          lane[0][l] += v_power * -(ca * dx + cb * dy);
-          lane[1][l] += v_power * -(cc * dy + cb * dx);
-          lane[2][l] += v_power * T(-0.5) * dx * dx;
-          lane[3][l] += v_power * -dx * dy;
-          lane[4][l] += v_power * T(-0.5) * dy * dy;
-          lane[5][l] += gauss * va;
+          sum[0] += v_power * dx;
+          sum[1] += v_power * dy;
+          sum[2] += v_power * dx * dx;
+          sum[3] += v_power * dx * dy;
+          sum[4] += v_power * dy * dy;
+          sum[5] += gauss * va;
+          sum[6] += w * d_r[p];
+          sum[7] += w * d_g[p];
+          sum[8] += w * d_b[p];
         }
       }
       T* eg = slot(k);
-      for (int j = 0; j < kEntryGrads; ++j) {
-        T sum = T(0);
-        for (int c = 0; c < kTileSize; ++c) sum += lane[j][c];
-        eg[j] = sum;
-      }
+      eg[0] = -(ca * sum[0] + cb * sum[1]);
+      eg[1] = -(cc * sum[1] + cb * sum[0]);
+      eg[2] = T(-0.5) * sum[2];
+      eg[3] = -sum[3];
+      eg[4] = T(-0.5) * sum[4];
+      for (int j = 5; j < kEntryGrads; ++j) eg[j] = sum[j];
     }
   });
 

@@ -1,6 +1,7 @@
 #include "reconstruction/trainer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -329,7 +330,11 @@ void Trainer::check_finite_parameters() const {
 
 IterationStats Trainer::step() {
   const int it = ++iteration_;
-  check_finite_parameters();
+  // The parameters as the last Adam step left them were checked there (fused into its loop);
+  // anything else that changed them (construction, densification, a reset, a checkpoint, a test)
+  // cleared the flag.
+  if (!parameters_checked_) check_finite_parameters();
+  parameters_checked_ = false;
   if (it % options_.sh_degree_interval == 0 && sh_degree_ < options_.max_sh_degree) ++sh_degree_;
   const int view_index = view_for_iteration(it);
   const TrainView& view = views_[view_index];
@@ -380,7 +385,6 @@ IterationStats Trainer::step() {
   } else {
     rasterize_backward(g_, cam, rs, &state_, v_image_, &grad_, &v_ndc_);
   }
-  check_finite_gradients();
 
   IterationStats stats;
   stats.iteration = it;
@@ -390,6 +394,15 @@ IterationStats Trainer::step() {
   // The reference updates its error statistics with the running densification statistics only.
   if (options_.robust == TrainOptions::Robust::kRobustFilter && it < options_.densify_until)
     robust_mask_.update(robust_errors_);
+  // The gradients are checked before anything uses them: here when Adam will not run in this
+  // iteration, else inside Adam (which reads them anyway), before densification statistics or
+  // parameters built from non-finite values can outlive the exception.
+  const bool densify_now = it < options_.densify_until && it > options_.densify_from &&
+                           it % options_.densification_interval == 0;
+  const bool white = options_.background[0] == 1 && options_.background[1] == 1 && options_.background[2] == 1;
+  const bool reset_now = it < options_.densify_until &&
+                         (it % options_.opacity_reset_interval == 0 || (white && it == options_.densify_from));
+  if (densify_now || reset_now) check_finite_gradients();
   if (it < options_.densify_until) {
     const int64_t n = int64_t(rendered.size());
     for (int64_t k = 0; k < n; ++k) {
@@ -399,7 +412,7 @@ IterationStats Trainer::step() {
       grad_accum_[i] += std::hypot(v_ndc_[k * 2], v_ndc_[k * 2 + 1]);
       grad_count_[i] += 1;
     }
-    if (it > options_.densify_from && it % options_.densification_interval == 0) {
+    if (densify_now) {
       densify_and_prune(it > options_.opacity_reset_interval);
       stats.densified = true;
       // The reference replaces every parameter tensor here, leaving them without gradients, so
@@ -407,18 +420,23 @@ IterationStats Trainer::step() {
       skip_adam = true;
     }
     // As the reference: also reset once at densify_from when training on a white background.
-    const bool white = options_.background[0] == 1 && options_.background[1] == 1 && options_.background[2] == 1;
-    if (it % options_.opacity_reset_interval == 0 || (white && it == options_.densify_from)) {
+    if (reset_now) {
       reset_opacity();
       skip_adam = true;
     }
   }
-  if (!skip_adam) adam_step();
+  if (!skip_adam && !adam_step()) {
+    // Adam met a non-finite gradient or produced a non-finite parameter: name the first one.
+    check_finite_gradients();
+    check_finite_parameters();
+    WGS_CHECK(!"Adam reported a non-finite value that the scans did not find");
+  }
+  parameters_checked_ = !skip_adam;
   stats.num_gaussians = int64_t(g_.size());
   return stats;
 }
 
-void Trainer::adam_step() {
+bool Trainer::adam_step() {
   const double b1 = options_.adam_beta1, b2 = options_.adam_beta2;
   std::array<float, 6> lr{}, step_size{}, bc2_sqrt{};
   lr[int(ParamGroup::kPosition)] = float(position_lr(iteration_));
@@ -449,6 +467,7 @@ void Trainer::adam_step() {
   collect(grad_, &grads);
   collect(adam_m_, &ms);
   collect(adam_v_, &vs);
+  std::atomic<bool> finite{true};  // a flag only: which value is bad, the scans say afterwards
   for (size_t a = 0; a < params.size(); ++a) {
     float* p = params[a]->data();
     const float* gr = grads[a]->data();
@@ -460,15 +479,18 @@ void Trainer::adam_step() {
       const int64_t rows = int64_t(params[a]->size()) / kShFloats;
       parallel_for_chunks(0, rows, kChunk, [&](int64_t, int64_t lo, int64_t hi) {
         const int64_t o = lo * kShFloats;
-        adam_update_rows(p + o, gr + o, m + o, v + o, hi - lo, kShFloats, 3, constants, rates(ParamGroup::kShDc),
-                         rates(ParamGroup::kShRest));
+        if (!adam_update_rows(p + o, gr + o, m + o, v + o, hi - lo, kShFloats, 3, constants,
+                              rates(ParamGroup::kShDc), rates(ParamGroup::kShRest)))
+          finite.store(false, std::memory_order_relaxed);
       });
     } else {
       parallel_for_chunks(0, int64_t(params[a]->size()), kChunk, [&](int64_t, int64_t lo, int64_t hi) {
-        adam_update(p + lo, gr + lo, m + lo, v + lo, hi - lo, constants, rates(group));
+        if (!adam_update(p + lo, gr + lo, m + lo, v + lo, hi - lo, constants, rates(group)))
+          finite.store(false, std::memory_order_relaxed);
       });
     }
   }
+  return finite.load();
 }
 
 void Trainer::reset_opacity() {

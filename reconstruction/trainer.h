@@ -140,7 +140,10 @@ class Trainer {
   GaussianSet<float> scene_gaussians() const;
   int64_t num_distractors() const { return num_distractors_; }
   const InTheWild& in_the_wild() const { return wild_; }
-  GaussianSet<float>& mutable_gaussians() { return g_; }  // tests inject faults through this
+  GaussianSet<float>& mutable_gaussians() {  // tests inject faults through this
+    parameters_checked_ = false;
+    return g_;
+  }
   const TrainOptions& options() const { return requested_; }    // as given (run.json, resume)
   const TrainOptions& effective_options() const { return options_; }  // with the scaled schedule
   double extent() const { return extent_; }
@@ -156,7 +159,8 @@ class Trainer {
  private:
   void densify_and_prune(bool prune_large);
   void reset_opacity();
-  void adam_step();
+  // Returns false when a gradient or an updated parameter is not finite.
+  bool adam_step();
   void check_finite_gradients() const;
   void check_finite_parameters() const;
   void check_finite_array(const std::vector<float>& a, ParamGroup group, int stride, const char* what) const;
@@ -182,6 +186,7 @@ class Trainer {
   int iteration_ = 0;
   int sh_degree_ = 0;
   int densify_capped_ = 0;
+  bool parameters_checked_ = false;  // g_ is as the last Adam step (which checked it) left it
 };
 
 using weathergs::peak_rss_mb;  // core/progress.h

@@ -146,6 +146,7 @@ double Trainer::load_checkpoint(const std::string& path) {
   sh_degree_ = sh_degree;
   adam_steps_ = adam_steps;
   extent_ = extent;
+  parameters_checked_ = false;  // the loaded parameters are scanned before the next step uses them
   return seconds;
 }
 

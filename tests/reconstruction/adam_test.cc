@@ -1,5 +1,5 @@
 // The vectorized Adam update and finiteness scan (reconstruction/adam.h) against plain scalar loops
-// of the same formulas: the same bits, whichever clone the CPU runs.
+// of the same formulas: the same bits, whichever clone the CPU runs; and the update's fused check.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -46,7 +46,7 @@ TEST(AdamTest, UpdateEqualsTheScalarFormula) {
   const AdamRates r{1.6e-4f / (1.f - 0.9f), std::sqrt(1.f - 0.999f)};
   for (int64_t n : {int64_t(1), int64_t(7), int64_t(1000), int64_t(4099)}) {  // tails of every length
     Arrays a = random_arrays(n, 11), b = a;
-    adam_update(a.p.data(), a.g.data(), a.m.data(), a.v.data(), n, c, r);
+    EXPECT_TRUE(adam_update(a.p.data(), a.g.data(), a.m.data(), a.v.data(), n, c, r)) << n;
     for (int64_t i = 0; i < n; ++i) scalar_update(&b, i, c, r);
     EXPECT_TRUE(same_bits(a.p, b.p)) << n;
     EXPECT_TRUE(same_bits(a.m, b.m)) << n;
@@ -60,11 +60,40 @@ TEST(AdamTest, RowsUseTheirColumnsRates) {
   const int width = 48, split = 3;
   const int64_t rows = 301;
   Arrays a = random_arrays(rows * width, 12), b = a;
-  adam_update_rows(a.p.data(), a.g.data(), a.m.data(), a.v.data(), rows, width, split, c, dc, rest);
+  EXPECT_TRUE(adam_update_rows(a.p.data(), a.g.data(), a.m.data(), a.v.data(), rows, width, split, c, dc, rest));
   for (int64_t i = 0; i < rows * width; ++i) scalar_update(&b, i, c, i % width < split ? dc : rest);
   EXPECT_TRUE(same_bits(a.p, b.p));
   EXPECT_TRUE(same_bits(a.m, b.m));
   EXPECT_TRUE(same_bits(a.v, b.v));
+}
+
+// The fused finiteness check (the trainer's per-iteration guard): false for a non-finite gradient and
+// for a parameter the update itself makes non-finite, in any position of the vector loop and its
+// tail; every element is still updated as the scalar formula says.
+TEST(AdamTest, UpdateReportsNonFiniteGradientsAndResults) {
+  const AdamConstants c;
+  const AdamRates r{1.6e-3f, std::sqrt(1.f - 0.999f)};
+  const int64_t n = 1037;
+  for (int64_t at : {int64_t(0), int64_t(5), int64_t(512), int64_t(1036)}) {
+    for (float bad : {std::numeric_limits<float>::quiet_NaN(), -std::numeric_limits<float>::infinity()}) {
+      Arrays a = random_arrays(n, 13), b = a;
+      a.g[at] = b.g[at] = bad;
+      EXPECT_FALSE(adam_update(a.p.data(), a.g.data(), a.m.data(), a.v.data(), n, c, r)) << at;
+      for (int64_t i = 0; i < n; ++i) scalar_update(&b, i, c, r);
+      EXPECT_TRUE(same_bits(a.p, b.p)) << at;
+    }
+    // A finite gradient that drives the parameter past FLT_MAX.
+    Arrays a = random_arrays(n, 14);
+    a.p[at] = std::numeric_limits<float>::max();
+    a.m[at] = -1.f;
+    a.g[at] = -1.f;
+    const AdamRates huge{1e38f, 1.f};
+    EXPECT_FALSE(adam_update(a.p.data(), a.g.data(), a.m.data(), a.v.data(), n, c, huge)) << at;
+    EXPECT_TRUE(std::isinf(a.p[at])) << at;
+    Arrays rows = random_arrays(n / 17 * 17, 15);
+    rows.g[at % rows.g.size()] = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_FALSE(adam_update_rows(rows.p.data(), rows.g.data(), rows.m.data(), rows.v.data(), n / 17, 17, 3, c, r, r));
+  }
 }
 
 TEST(AdamTest, FirstNonFiniteFindsTheFirstBadElement) {
