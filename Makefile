@@ -48,9 +48,11 @@ TRAINING_DATA ?= data/training
 training-data: build
 	bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) 12 quick
 
-# Retrains every weight file in models/ from scratch (models/README.md).
+# Retrains every weight file in models/ from scratch (models/README.md); MODELS_DIR=DIR writes them
+# there instead, leaving the shipped weights alone (e.g. to compare sha256s).
+MODELS_DIR ?= models
 models: training-data
-	bash scripts/train-models.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) models
+	bash scripts/train-models.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) $(MODELS_DIR)
 
 # libFuzzer harnesses (fuzz/README.md) in a clang build; FUZZ_SECONDS per harness (600 for the
 # documented runs).

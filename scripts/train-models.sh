@@ -30,15 +30,9 @@ for d in "$DATA"/*_w[0-9][0-9]; do
 done
 if [ ${#train[@]} -eq 0 ] || [ ${#held[@]} -eq 0 ]; then echo "train-models: no training datasets in $DATA or no scene $LED_HELD_SCENE (run make training-data)" >&2; exit 2; fi
 ONLY=${ONLY:-all}
-if [ "$ONLY" = all ] || [ "$ONLY" = led ]; then
-  mkdir -p "$OUT/led"
-  echo "train-models: LED on ${#train[@]} datasets, calibrated on ${#held[@]} held out"
-  "$BIN" --threads 1 train-led --data "${train[@]}" --held-out "${held[@]}" --out "$OUT/led/led" \
-    --iterations "$ITERATIONS" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --seed 1 --threads 1
-fi
 
-# The learned AEF (derain, desnow) and the weather selector (docs/restoration.md). The clear renders
-# (clear/<scene>) are clear training views for both.
+# The AEF's training and held-out sets (the clear renders, clear/<scene>, are clear views for the
+# plugins and the selector).
 AEF_HELD_SCENE=market
 AEF_ITERATIONS=${AEF_ITERATIONS:-5000}
 SELECTOR_ITERATIONS=${SELECTOR_ITERATIONS:-1500}
@@ -49,16 +43,49 @@ for d in "$DATA"/*_w[0-9][0-9] "$DATA"/clear/*; do
   case $name in photo_*) continue ;; esac
   if [ "${name%_w[0-9][0-9]}" = "$AEF_HELD_SCENE" ] || [[ " ${held_last[*]} " == *" $d "* ]]; then aef_held+=("$d"); else aef_train+=("$d"); fi
 done
-mkdir -p "$OUT/aef"
-if [ "$ONLY" = all ] || [ "$ONLY" = aef ]; then
-  echo "train-models: AEF plugins on ${#aef_train[@]} datasets, ${#aef_held[@]} held out (scene $AEF_HELD_SCENE and *_w11)"
-  for model in derain desnow; do
-    "$BIN" --threads 1 train-aef --model $model --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/$model" \
-      --iterations "$AEF_ITERATIONS" --seed 1 --threads 1
-  done
-fi
-if [ "$ONLY" = all ] || [ "$ONLY" = aef ] || [ "$ONLY" = selector ]; then
-  echo "train-models: weather selector on ${#aef_train[@]} datasets, theta calibrated on ${#aef_held[@]} held out"
-  "$BIN" --threads 1 train-aef --model selector --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/selector" \
-    --iterations "$SELECTOR_ITERATIONS" --seed 1 --threads 1
-fi
+
+# Every network trains with one thread (the same seed then gives the same weights), so the work runs
+# as two single-threaded jobs side by side, one per core: the LED then the selector, and the two AEF
+# plugins (their times: docs/restoration.md). Each job logs to OUT/logs/<job>.log.
+mkdir -p "$OUT/led" "$OUT/aef" "$OUT/logs"
+led_job() {
+  if [ "$ONLY" = all ] || [ "$ONLY" = led ]; then
+    echo "train-models: LED on ${#train[@]} datasets, calibrated on ${#held[@]} held out"
+    "$BIN" --threads 1 train-led --data "${train[@]}" --held-out "${held[@]}" --out "$OUT/led/led" \
+      --iterations "$ITERATIONS" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --seed 1 --threads 1
+  fi
+  if [ "$ONLY" = all ] || [ "$ONLY" = aef ] || [ "$ONLY" = selector ]; then
+    echo "train-models: weather selector on ${#aef_train[@]} datasets, theta calibrated on ${#aef_held[@]} held out"
+    "$BIN" --threads 1 train-aef --model selector --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/selector" \
+      --iterations "$SELECTOR_ITERATIONS" --seed 1 --threads 1
+  fi
+}
+aef_job() {
+  if [ "$ONLY" = all ] || [ "$ONLY" = aef ]; then
+    echo "train-models: AEF plugins on ${#aef_train[@]} datasets, ${#aef_held[@]} held out (scene $AEF_HELD_SCENE and *_w11)"
+    for model in derain desnow; do
+      "$BIN" --threads 1 train-aef --model $model --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/$model" \
+        --iterations "$AEF_ITERATIONS" --seed 1 --threads 1
+    done
+  fi
+}
+start=$(date +%s)
+led_job > "$OUT/logs/led_selector.log" 2>&1 &
+led_pid=$!
+aef_job > "$OUT/logs/aef_plugins.log" 2>&1 &
+aef_pid=$!
+echo "train-models: two jobs running (logs: $OUT/logs/led_selector.log, $OUT/logs/aef_plugins.log)"
+# If this script is stopped, stop the jobs too (a partial model is never left: each command writes atomically).
+trap 'kill $led_pid $aef_pid 2>/dev/null' INT TERM
+status=0
+for job in "led_selector:$led_pid" "aef_plugins:$aef_pid"; do
+  if wait "${job#*:}"; then
+    echo "train-models: ${job%%:*} done after $(( $(date +%s) - start )) s"
+  else
+    code=$?
+    echo "train-models: ${job%%:*} FAILED (exit $code); last lines of $OUT/logs/${job%%:*}.log:" >&2
+    tail -n 20 "$OUT/logs/${job%%:*}.log" >&2
+    status=$code
+  fi
+done
+exit $status
