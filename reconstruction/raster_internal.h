@@ -112,8 +112,8 @@ inline T splat_power(T ca, T cb, T cc, T dx, T dy) {
   return T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
 }
 
-// The float tile kernels (raster_simd.cc): 4 or 8 pixels at a time, lane by lane the same
-// operations as the scalar templates of rasterizer.cc; every width gives bit-identical results.
+// The float tile kernels (raster_simd.cc): 4 or 8 pixels at a time, lane by lane the per-pixel
+// operations of the scalar templates of rasterizer.cc; every width gives bit-identical results.
 void render_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, int64_t tile);
 void backward_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, const std::vector<float>& v_image,
                         int64_t tile);

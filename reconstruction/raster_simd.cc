@@ -1,9 +1,10 @@
 // The float tile kernels of the rasterizer, W pixels at a time with GCC/Clang vector extensions.
 // One template, two widths chosen once at run time (raster_internal.h): 4 lanes (SSE2, every x86-64;
-// NEON on arm64) and 8 (AVX2). Each lane computes exactly what the scalar kernels of rasterizer.cc
-// compute for its pixel: only IEEE element-wise operations and no fused multiply-add (the library
-// compiles with -ffp-contract=off: reconstruction/CMakeLists.txt), so both widths give
-// bit-identical images and gradients (test reconstruction/rasterizer). A 16-lane AVX-512F variant of
+// NEON on arm64) and 8 (AVX2). Each lane computes for its pixel the per-pixel arithmetic of the
+// scalar kernels of rasterizer.cc (which serve double; they sum a backward entry's terms in pixel
+// order, these 8 lanes wide at either width): only IEEE element-wise operations and no fused
+// multiply-add (the library compiles with -ffp-contract=off: reconstruction/CMakeLists.txt), so both
+// widths give bit-identical images and gradients (test reconstruction/rasterizer). A 16-lane AVX-512F variant of
 // this template was measured 2.6x slower than 8 lanes (130 vs 50 ms per iteration, bench_reconstruction
 // 300x200/50k, 2026-11-24) and is not built. The lanes of a block that lie outside a Gaussian's
 // alpha extent get alpha < 1/255 and are skipped by the same test as any other pixel, so wider
