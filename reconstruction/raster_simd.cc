@@ -51,20 +51,14 @@ WGS_ALWAYS_INLINE typename Lanes<W>::f blend_exp_v(typename Lanes<W>::f x) {
   x = vmax(x, splat<vf>(-87.0f));
   const vf t = x * 1.44269504088896341f;
   const vi n = __builtin_convertvector(t - 0.5f, vi);
-  const vf fn = __builtin_convertvector(n, vf);
-  vf r = x - fn * 0.693359375f;
-  r = r - fn * -2.12194440e-4f;
-  vf p = splat<vf>(1.9875691500e-4f);
-  p = p * r + 1.3981999507e-3f;
-  p = p * r + 8.3334519073e-3f;
-  p = p * r + 4.1665795894e-2f;
-  p = p * r + 1.6666665459e-1f;
-  p = p * r + 5.0000001201e-1f;
-  const vf y = p * r * r + r + 1.0f;
+  const vf f = t - __builtin_convertvector(n, vf);
+  vf q = splat<vf>(kExp2Poly[0]);
+  for (int k = 1; k < 5; ++k) q = q * f + kExp2Poly[k];
+  const vf p = q * f + 1.0f;
   const vi bits = (n + 127) << 23;
   vf scale;
   std::memcpy(&scale, &bits, sizeof(vf));
-  return y * scale;
+  return p * scale;
 }
 
 template <typename V>

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
@@ -121,6 +122,28 @@ TEST(RasterizerTest, OpacityAwareTilesKeepEveryContributingPixel) {
 }
 
 // The float path (fast exp) against the double path on the same scene.
+// The float blend exp (raster_internal.h) against std::exp in double: densely over the blend's range
+// [-5.6, 0] (a weight >= 1/255 needs power >= -ln 255), at tiny arguments, and down to its -87 floor.
+TEST(RasterizerTest, BlendExpIsAccurate) {
+  constexpr double kBlendRangeTol = 6e-7;  // 4.4e-7 in a float emulation: the fit (9e-8) + x log2 e rounding
+  constexpr double kFullRangeTol = 5e-6;   // 3.9e-6 near -87 (the rounding of x log2 e grows with |x|)
+  double worst_blend = 0, worst_full = 0;
+  auto err = [](float x) {
+    const double ref = std::exp(double(x));
+    return std::abs(double(internal::blend_exp(x)) - ref) / ref;
+  };
+  constexpr int kSamples = 2000000;
+  for (int i = 0; i <= kSamples; ++i) worst_blend = std::max(worst_blend, err(-5.6f * float(i) / float(kSamples)));
+  for (int k = 1; k < 126; ++k) worst_blend = std::max(worst_blend, err(-std::ldexp(1.f, -k)));
+  for (int i = 0; i <= kSamples / 10; ++i) worst_full = std::max(worst_full, err(-87.f * float(i) / float(kSamples / 10)));
+  EXPECT_LT(worst_blend, kBlendRangeTol);
+  EXPECT_LT(worst_full, kFullRangeTol);
+  EXPECT_EQ(internal::blend_exp(0.f), 1.f);
+  EXPECT_GT(internal::blend_exp(-200.f), 0.f);  // clamped at -87, never 0 or NaN
+  EXPECT_TRUE(std::isfinite(internal::blend_exp(-std::numeric_limits<float>::infinity())));
+  std::printf("blend exp: max relative error %.2e on [-5.6, 0], %.2e on [-87, 0]\n", worst_blend, worst_full);
+}
+
 TEST(RasterizerTest, FloatMatchesDouble) {
   const Camera c = front_camera(64, 48);
   const GaussianSet<double> gd = random_gaussians<double>(300, 22, 1.0, 0.08, 0.2);
