@@ -294,8 +294,9 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
     }
     float sum[kSums];
     for (int j = 0; j < kSums; ++j) {
-      const v4f half = __builtin_shufflevector(acc[j], acc[j], 0, 1, 2, 3) + __builtin_shufflevector(acc[j], acc[j], 4, 5, 6, 7);
-      sum[j] = hsum4(half);
+      const v4f lo = __builtin_shufflevector(acc[j], acc[j], 0, 1, 2, 3);
+      const v4f hi = __builtin_shufflevector(acc[j], acc[j], 4, 5, 6, 7);
+      sum[j] = hsum4(lo + hi);
     }
     float* eg = slot(k);
     eg[0] = -(sp[2] * sum[0] + sp[3] * sum[1]);

@@ -135,7 +135,8 @@ TEST(RasterizerTest, BlendExpIsAccurate) {
   constexpr int kSamples = 2000000;
   for (int i = 0; i <= kSamples; ++i) worst_blend = std::max(worst_blend, err(-5.6f * float(i) / float(kSamples)));
   for (int k = 1; k < 126; ++k) worst_blend = std::max(worst_blend, err(-std::ldexp(1.f, -k)));
-  for (int i = 0; i <= kSamples / 10; ++i) worst_full = std::max(worst_full, err(-87.f * float(i) / float(kSamples / 10)));
+  for (int i = 0; i <= kSamples / 10; ++i)
+    worst_full = std::max(worst_full, err(-87.f * float(i) / float(kSamples / 10)));
   EXPECT_LT(worst_blend, kBlendRangeTol);
   EXPECT_LT(worst_full, kFullRangeTol);
   EXPECT_EQ(internal::blend_exp(0.f), 1.f);
