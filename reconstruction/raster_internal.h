@@ -111,6 +111,117 @@ inline T splat_power(T ca, T cb, T cc, T dx, T dy) {
   return T(-0.5) * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
 }
 
+// Whether any pixel center of tile (tx, ty) can get alpha >= 1/255 from the splat record `sp`: the
+// minimum over the tile's pixel-center rectangle of q(d) = d^T conic d (the splat's power is -q/2)
+// against q_max = 2 ln(255 o). q is convex, so the minimum is 0 with the mean inside the rectangle,
+// else on one of its edges, where it is a 1-D quadratic minimised in closed form. The margin (1e-3
+// absolute on q, 1e-4 relative; alpha changes by < 0.06 %) covers the float rounding of the
+// kernels' per-pixel power and exp (< 1e-5 on q), so no tile with a contributing pixel is dropped.
+// q_max = 2 ln(255 o) with that margin (the record's sp[11]).
+template <typename T>
+inline bool tile_touched(const T* sp, T q_max, T inv_ca, T inv_cc, int tx, int ty, int width, int height) {
+  const T ca = sp[2], cb = sp[3], cc = sp[4];
+  const T x_lo = T(tx * kTileSize) + T(0.5) - sp[0];
+  const T x_hi = T(std::min(width, (tx + 1) * kTileSize)) - T(0.5) - sp[0];
+  const T y_lo = T(ty * kTileSize) + T(0.5) - sp[1];
+  const T y_hi = T(std::min(height, (ty + 1) * kTileSize)) - T(0.5) - sp[1];
+  if (x_lo <= T(0) && x_hi >= T(0) && y_lo <= T(0) && y_hi >= T(0)) return true;
+  auto q = [&](T dx, T dy) { return ca * dx * dx + T(2) * cb * dx * dy + cc * dy * dy; };
+  T q_min = std::numeric_limits<T>::infinity();
+  for (T dx : {x_lo, x_hi}) q_min = std::min(q_min, q(dx, std::clamp(-cb * dx * inv_cc, y_lo, y_hi)));
+  for (T dy : {y_lo, y_hi}) q_min = std::min(q_min, q(std::clamp(-cb * dy * inv_ca, x_lo, x_hi), dy));
+  return q_min <= q_max;
+}
+
+// Marks Gaussian i as not rendered (the state of a culled Gaussian).
+template <typename T>
+inline void clear_gaussian(RasterState<T>* s, int64_t i) {
+  s->radius[i] = 0;
+  for (int k = 0; k < 4; ++k) s->rect[i * 4 + k] = 0;
+  s->tile_mask[i] = 0;
+}
+
+// The part of the per-Gaussian preprocessing that follows the projection, shared by the scalar
+// template (rasterizer.cc) and the float SIMD one (preprocess_simd.cc): from the projected mean,
+// the 2D covariance [[a, b], [b, c]] (low-pass included), the camera depth z (> the near plane), the
+// clamped SH colour and the opacity logit, the reference's radius and conic, the tile rectangle, the
+// packed record and the opacity-aware tile mask. Leaves the Gaussian cleared (clear_gaussian) when
+// the covariance is degenerate, a value is not finite or no tile is touched.
+template <typename T>
+inline void finish_gaussian(RasterState<T>* s, int64_t i, T mean_x, T mean_y, T a, T b, T c, T z, const T color[3],
+                            uint8_t clamped, T opacity_logit) {
+  const T det = a * c - b * b;
+  if (!(det > T(0))) return;
+  const T mid = T(0.5) * (a + c);
+  const T root = std::sqrt(std::max(T(kMinEigenGap), mid * mid - det));
+  const T lambda = std::max(mid + root, mid - root);
+  const T radius = std::ceil(T(3) * std::sqrt(lambda));
+  const T conic_a = c / det, conic_b = -b / det, conic_c = a / det;
+  if (!all_finite<T>({mean_x, mean_y, a, b, c, radius, conic_a, conic_b, conic_c})) return;
+  // Tile rectangle exactly as the reference's getRect, in its pixel-center-at-integer frame.
+  const T px = mean_x - T(0.5), py = mean_y - T(0.5);
+  const int x0 = tile_floor_index(px - radius, s->tiles_x);
+  const int y0 = tile_floor_index(py - radius, s->tiles_y);
+  const int x1 = tile_floor_index(px + radius + T(kTileSize - 1), s->tiles_x);
+  const int y1 = tile_floor_index(py + radius + T(kTileSize - 1), s->tiles_y);
+  if ((x1 - x0) * (y1 - y0) == 0) return;
+  if (!all_finite<T>({color[0], color[1], color[2]})) return;
+  s->radius[i] = int32_t(std::min<T>(radius, T(std::numeric_limits<int32_t>::max() / 2)));
+  s->mean2d[i * 2] = mean_x; s->mean2d[i * 2 + 1] = mean_y;
+  s->cov2d[i * 3] = a; s->cov2d[i * 3 + 1] = b; s->cov2d[i * 3 + 2] = c;
+  s->conic[i * 3] = conic_a; s->conic[i * 3 + 1] = conic_b; s->conic[i * 3 + 2] = conic_c;
+  s->opacity[i] = sigmoid(opacity_logit);
+  for (int k = 0; k < 3; ++k) s->color[i * 3 + k] = color[k];
+  s->clamped[i] = clamped;
+  s->depth[i] = z;
+  T* sp = &s->splat[i * kSplatFloats];
+  sp[0] = mean_x; sp[1] = mean_y; sp[2] = conic_a; sp[3] = conic_b; sp[4] = conic_c;
+  sp[5] = s->opacity[i]; sp[6] = color[0]; sp[7] = color[1]; sp[8] = color[2];
+  const T q_max = alpha_q_max(sp[5]);
+  sp[9] = alpha_extent(q_max, a);
+  sp[10] = alpha_extent(q_max, c);
+  // q limit of the per-row spans (row_span) with tile_touched's margin.
+  sp[11] = q_max < T(0) ? T(-1) : q_max * T(1.0001) + T(1e-3);
+  // Opacity-aware tiles: the kernels blend only pixels within the alpha extent, so tiles of the
+  // 3-sigma rectangle that no such pixel reaches get no entry (same images and gradients, fewer
+  // entries to bin, sort and replay). `radius` stays the reference's (densification uses it).
+  int32_t* r = &s->rect[i * 4];
+  if (sp[9] < T(0)) {
+    r[0] = r[1] = r[2] = r[3] = 0;
+  } else {
+    r[0] = std::max(x0, tile_floor_index(std::ceil(mean_x - sp[9] - T(0.5)), s->tiles_x));
+    r[1] = std::max(y0, tile_floor_index(std::ceil(mean_y - sp[10] - T(0.5)), s->tiles_y));
+    r[2] = std::min(x1, tile_floor_index(std::floor(mean_x + sp[9] - T(0.5)) + T(kTileSize), s->tiles_x));
+    r[3] = std::min(y1, tile_floor_index(std::floor(mean_y + sp[10] - T(0.5)) + T(kTileSize), s->tiles_y));
+    if (r[2] <= r[0] || r[3] <= r[1]) r[0] = r[1] = r[2] = r[3] = 0;
+  }
+  // Tiles of the rectangle that the ellipse misses (its corners, for a tilted or elongated
+  // splat) get no entry either. A rectangle one tile high or wide is the ellipse's own extent,
+  // so all of its tiles are kept untested; rectangles of more than 64 tiles keep all of theirs.
+  const int area = (r[2] - r[0]) * (r[3] - r[1]);
+  if (area > 0 && area <= kMaskTiles) {
+    uint64_t mask = area == kMaskTiles ? ~uint64_t(0) : (uint64_t(1) << area) - 1;
+    if (r[2] - r[0] > 1 && r[3] - r[1] > 1) {
+      mask = 0;
+      const T inv_ca = T(1) / sp[2], inv_cc = T(1) / sp[4];
+      for (int ty = r[1], bit = 0; ty < r[3]; ++ty)
+        for (int tx = r[0]; tx < r[2]; ++tx, ++bit)
+          if (tile_touched(sp, sp[11], inv_ca, inv_cc, tx, ty, s->width, s->height)) mask |= uint64_t(1) << bit;
+    }
+    s->tile_mask[i] = mask;
+    if (mask == 0) r[0] = r[1] = r[2] = r[3] = 0;
+  }
+}
+
+// Per Gaussian (parallel): projection, 2D covariance, SH colour, then finish_gaussian. The float
+// version (preprocess_simd.cc) does the arithmetic of the scalar template (rasterizer.cc) for 4 or 8
+// Gaussians at a time (the tile kernels' width), operation by operation in the same order, so both
+// give the same bits (test reconstruction/rasterizer); preprocess_scalar runs the template in float.
+void preprocess_simd(const GaussianSet<float>& g, const RasterCamera<float>& cam, const RasterSettings<float>& settings,
+                     RasterState<float>* s);
+void preprocess_scalar(const GaussianSet<float>& g, const RasterCamera<float>& cam,
+                       const RasterSettings<float>& settings, RasterState<float>* s);
+
 // The float tile kernels (raster_simd.cc): 4 or 8 pixels at a time, lane by lane the per-pixel
 // operations of the scalar templates of rasterizer.cc; every width gives bit-identical results.
 void render_tile_simd(const RasterSettings<float>& settings, RasterState<float>* s, int64_t tile);

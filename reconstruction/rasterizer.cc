@@ -15,37 +15,13 @@ namespace weathergs::recon {
 namespace {
 
 using namespace internal;
-// Whether any pixel center of tile (tx, ty) can get alpha >= 1/255 from the splat record `sp`: the
-// minimum over the tile's pixel-center rectangle of q(d) = d^T conic d (the splat's power is -q/2)
-// against q_max = 2 ln(255 o). q is convex, so the minimum is 0 with the mean inside the rectangle,
-// else on one of its edges, where it is a 1-D quadratic minimised in closed form. The margin (1e-3
-// absolute on q, 1e-4 relative; alpha changes by < 0.06 %) covers the float rounding of the
-// kernels' per-pixel power and exp (< 1e-5 on q), so no tile with a contributing pixel is dropped.
-// q_max = 2 ln(255 o) with that margin (the record's sp[11]).
-template <typename T>
-bool tile_touched(const T* sp, T q_max, T inv_ca, T inv_cc, int tx, int ty, int width, int height) {
-  const T ca = sp[2], cb = sp[3], cc = sp[4];
-  const T x_lo = T(tx * kTileSize) + T(0.5) - sp[0];
-  const T x_hi = T(std::min(width, (tx + 1) * kTileSize)) - T(0.5) - sp[0];
-  const T y_lo = T(ty * kTileSize) + T(0.5) - sp[1];
-  const T y_hi = T(std::min(height, (ty + 1) * kTileSize)) - T(0.5) - sp[1];
-  if (x_lo <= T(0) && x_hi >= T(0) && y_lo <= T(0) && y_hi >= T(0)) return true;
-  auto q = [&](T dx, T dy) { return ca * dx * dx + T(2) * cb * dx * dy + cc * dy * dy; };
-  T q_min = std::numeric_limits<T>::infinity();
-  for (T dx : {x_lo, x_hi}) q_min = std::min(q_min, q(dx, std::clamp(-cb * dx * inv_cc, y_lo, y_hi)));
-  for (T dy : {y_lo, y_hi}) q_min = std::min(q_min, q(std::clamp(-cb * dy * inv_ca, x_lo, x_hi), dy));
-  return q_min <= q_max;
-}
-
 template <typename T>
 void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const RasterSettings<T>& settings,
                 RasterState<T>* s) {
   const int64_t n = int64_t(g.size());
   parallel_for_chunks(0, n, kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
     for (int64_t i = lo; i < hi; ++i) {
-      s->radius[i] = 0;
-      for (int k = 0; k < 4; ++k) s->rect[i * 4 + k] = 0;
-      s->tile_mask[i] = 0;
+      clear_gaussian(s, i);
       const Vec3<T> p(g.position[i * 3], g.position[i * 3 + 1], g.position[i * 3 + 2]);
       const T z = cam.rotation.row(2).dot(p) + cam.translation.z();
       if (!(z > T(kNearPlane))) continue;  // also culls NaN
@@ -53,72 +29,14 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
       const Vec4<T> q(g.rotation[i * 4], g.rotation[i * 4 + 1], g.rotation[i * 4 + 2], g.rotation[i * 4 + 3]);
       const Mat3<T> sigma = covariance_3d(ls, q);
       const Projection<T> pr = project_gaussian(p, sigma, cam);
-      const T a = pr.cov(0, 0), b = pr.cov(0, 1), c = pr.cov(1, 1);
-      const T det = a * c - b * b;
-      if (!(det > T(0))) continue;
-      const T mid = T(0.5) * (a + c);
-      const T root = std::sqrt(std::max(T(kMinEigenGap), mid * mid - det));
-      const T lambda = std::max(mid + root, mid - root);
-      const T radius = std::ceil(T(3) * std::sqrt(lambda));
-      const T conic_a = c / det, conic_b = -b / det, conic_c = a / det;
-      if (!all_finite<T>({pr.mean.x(), pr.mean.y(), a, b, c, radius, conic_a, conic_b, conic_c})) continue;
-      // Tile rectangle exactly as the reference's getRect, in its pixel-center-at-integer frame.
-      const T px = pr.mean.x() - T(0.5), py = pr.mean.y() - T(0.5);
-      const int x0 = tile_floor_index(px - radius, s->tiles_x);
-      const int y0 = tile_floor_index(py - radius, s->tiles_y);
-      const int x1 = tile_floor_index(px + radius + T(kTileSize - 1), s->tiles_x);
-      const int y1 = tile_floor_index(py + radius + T(kTileSize - 1), s->tiles_y);
-      if ((x1 - x0) * (y1 - y0) == 0) continue;
       T len;
       const Vec3<T> dir = view_direction(p, cam.center_world, &len);
       bool clamped[3];
       const Vec3<T> color = sh_to_color(settings.sh_degree, &g.sh[i * kShFloats], dir, clamped);
-      if (!all_finite<T>({color.x(), color.y(), color.z()})) continue;
-      s->radius[i] = int32_t(std::min<T>(radius, T(std::numeric_limits<int32_t>::max() / 2)));
-      s->mean2d[i * 2] = pr.mean.x(); s->mean2d[i * 2 + 1] = pr.mean.y();
-      s->cov2d[i * 3] = a; s->cov2d[i * 3 + 1] = b; s->cov2d[i * 3 + 2] = c;
-      s->conic[i * 3] = conic_a; s->conic[i * 3 + 1] = conic_b; s->conic[i * 3 + 2] = conic_c;
-      s->opacity[i] = sigmoid(g.opacity_logit[i]);
-      for (int k = 0; k < 3; ++k) s->color[i * 3 + k] = color[k];
-      s->clamped[i] = uint8_t((clamped[0] ? 1 : 0) | (clamped[1] ? 2 : 0) | (clamped[2] ? 4 : 0));
-      s->depth[i] = z;
-      T* sp = &s->splat[i * kSplatFloats];
-      sp[0] = pr.mean.x(); sp[1] = pr.mean.y(); sp[2] = conic_a; sp[3] = conic_b; sp[4] = conic_c;
-      sp[5] = s->opacity[i]; sp[6] = color[0]; sp[7] = color[1]; sp[8] = color[2];
-      const T q_max = alpha_q_max(sp[5]);
-      sp[9] = alpha_extent(q_max, a);
-      sp[10] = alpha_extent(q_max, c);
-      // q limit of the per-row spans (raster_internal.h, row_span) with tile_touched's margin.
-      sp[11] = q_max < T(0) ? T(-1) : q_max * T(1.0001) + T(1e-3);
-      // Opacity-aware tiles: the kernels blend only pixels within the alpha extent, so tiles of the
-      // 3-sigma rectangle that no such pixel reaches get no entry (same images and gradients, fewer
-      // entries to bin, sort and replay). `radius` stays the reference's (densification uses it).
-      int32_t* r = &s->rect[i * 4];
-      if (sp[9] < T(0)) {
-        r[0] = r[1] = r[2] = r[3] = 0;
-      } else {
-        r[0] = std::max(x0, tile_floor_index(std::ceil(pr.mean.x() - sp[9] - T(0.5)), s->tiles_x));
-        r[1] = std::max(y0, tile_floor_index(std::ceil(pr.mean.y() - sp[10] - T(0.5)), s->tiles_y));
-        r[2] = std::min(x1, tile_floor_index(std::floor(pr.mean.x() + sp[9] - T(0.5)) + T(kTileSize), s->tiles_x));
-        r[3] = std::min(y1, tile_floor_index(std::floor(pr.mean.y() + sp[10] - T(0.5)) + T(kTileSize), s->tiles_y));
-        if (r[2] <= r[0] || r[3] <= r[1]) r[0] = r[1] = r[2] = r[3] = 0;
-      }
-      // Tiles of the rectangle that the ellipse misses (its corners, for a tilted or elongated
-      // splat) get no entry either. A rectangle one tile high or wide is the ellipse's own extent,
-      // so all of its tiles are kept untested; rectangles of more than 64 tiles keep all of theirs.
-      const int area = (r[2] - r[0]) * (r[3] - r[1]);
-      if (area > 0 && area <= kMaskTiles) {
-        uint64_t mask = area == kMaskTiles ? ~uint64_t(0) : (uint64_t(1) << area) - 1;
-        if (r[2] - r[0] > 1 && r[3] - r[1] > 1) {
-          mask = 0;
-          const T inv_ca = T(1) / sp[2], inv_cc = T(1) / sp[4];
-          for (int ty = r[1], b = 0; ty < r[3]; ++ty)
-            for (int tx = r[0]; tx < r[2]; ++tx, ++b)
-              if (tile_touched(sp, sp[11], inv_ca, inv_cc, tx, ty, s->width, s->height)) mask |= uint64_t(1) << b;
-        }
-        s->tile_mask[i] = mask;
-        if (mask == 0) r[0] = r[1] = r[2] = r[3] = 0;
-      }
+      const T rgb[3] = {color.x(), color.y(), color.z()};
+      finish_gaussian(s, i, pr.mean.x(), pr.mean.y(), pr.cov(0, 0), pr.cov(0, 1), pr.cov(1, 1), z, rgb,
+                      uint8_t((clamped[0] ? 1 : 0) | (clamped[1] ? 2 : 0) | (clamped[2] ? 4 : 0)),
+                      g.opacity_logit[i]);
     }
   });
 }
@@ -346,7 +264,8 @@ void rasterize_forward(const GaussianSet<T>& g, const RasterCamera<T>& camera, c
   s->image.resize(pixels * 3);
   s->final_transmittance.resize(pixels);
   s->n_contrib.resize(pixels);
-  preprocess(g, camera, settings, s);
+  if constexpr (std::is_same_v<T, float>) preprocess_simd(g, camera, settings, s);
+  else preprocess(g, camera, settings, s);
   static thread_local std::vector<uint64_t> keys;
   bin_and_sort(s, &keys);
   render_tiles(settings, s);
@@ -511,6 +430,11 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
       for (int k = 0; k < 4; ++k) grad->rotation[i * 4 + k] = v_q[k];
     }
   });
+}
+
+void internal::preprocess_scalar(const GaussianSet<float>& g, const RasterCamera<float>& cam,
+                                 const RasterSettings<float>& settings, RasterState<float>* s) {
+  preprocess(g, cam, settings, s);
 }
 
 template void rasterize_forward<float>(const GaussianSet<float>&, const RasterCamera<float>&,

@@ -1,0 +1,305 @@
+// The float preprocessing of the rasterizer (projection, 2D covariance, SH colour), 4 or 8 Gaussians
+// at a time with GCC/Clang vector extensions, at the tile kernels' width (raster_internal.h).
+//
+// Same bits as the scalar template (preprocess in rasterizer.cc, which Eigen evaluates): every lane
+// does that template's IEEE operations in its order. Eigen sums a fixed-size product's three terms
+// as a0 + (a1 + a2) and a Vector4f's squared norm as (q0^2 + q2^2) + (q1^2 + q3^2) (its SSE
+// reduction); the formulas below spell those orders out, with the Jacobian's structural zeros kept
+// (0 * R(k, j) may be -0, which decides the sign of a zero sum). exp of the log scales runs through
+// libm lane by lane, as Eigen's array exp does. The library compiles with -ffp-contract=off (no
+// fused multiply-add). Test RasterizerTest.SimdPreprocessEqualsScalar compares every output.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "core/parallel.h"
+#include "reconstruction/raster_internal.h"
+
+#pragma GCC diagnostic ignored "-Wpsabi"
+#define WGS_ALWAYS_INLINE inline __attribute__((always_inline))
+
+namespace weathergs::recon::internal {
+
+namespace {
+
+template <int W>
+struct Lanes {
+  typedef float f __attribute__((vector_size(4 * W)));
+  typedef int32_t i __attribute__((vector_size(4 * W)));
+};
+
+template <typename V, typename F>
+WGS_ALWAYS_INLINE V lanewise(V v, F fn) {
+  for (int l = 0; l < int(sizeof(V) / sizeof(float)); ++l) v[l] = fn(v[l]);
+  return v;
+}
+
+// a0 * b0 + (a1 * b1 + a2 * b2): Eigen's order for a fixed-size product's coefficient.
+template <typename A, typename B, typename C, typename D, typename E, typename F>
+WGS_ALWAYS_INLINE auto sum3(A a0, B b0, C a1, D b1, E a2, F b2) {
+  return a0 * b0 + (a1 * b1 + a2 * b2);
+}
+
+// tile_floor_index, lane by lane.
+template <int W>
+WGS_ALWAYS_INLINE typename Lanes<W>::i tile_floor_v(typename Lanes<W>::f v, int grid) {
+  using vf = typename Lanes<W>::f;
+  using vi = typename Lanes<W>::i;
+  const vf t = v / float(kTileSize);
+  const vf hi = vf{} + float(grid);
+  const vf c = t < 0.0f ? vf{} : (hi < t ? hi : t);  // std::clamp(t, 0, grid)
+  const vi n = __builtin_convertvector(c == c ? c : vf{}, vi);
+  return n;
+}
+
+// finish_gaussian's tile mask: tile_touched for W tiles of the rectangle r at a time (row-major,
+// bit b = tile b of the rectangle), the same operations lane by lane.
+template <int W>
+WGS_ALWAYS_INLINE uint64_t tile_mask_v(const float* sp, float inv_ca, float inv_cc, const int32_t* r, int area,
+                                       int width, int height) {
+  using vf = typename Lanes<W>::f;
+  using vi = typename Lanes<W>::i;
+  const int w = r[2] - r[0];
+  const float ca = sp[2], cb = sp[3], cc = sp[4], q_max = sp[11];
+  uint64_t mask = 0;
+  for (int b0 = 0; b0 < area; b0 += W) {
+    vf x_lo, x_hi, y_lo, y_hi;
+    for (int l = 0; l < W; ++l) {
+      const int b = std::min(b0 + l, area - 1);
+      const int tx = r[0] + b % w, ty = r[1] + b / w;
+      x_lo[l] = float(tx * kTileSize);
+      x_hi[l] = float(std::min(width, (tx + 1) * kTileSize));
+      y_lo[l] = float(ty * kTileSize);
+      y_hi[l] = float(std::min(height, (ty + 1) * kTileSize));
+    }
+    x_lo = x_lo + 0.5f - sp[0]; x_hi = x_hi - 0.5f - sp[0];
+    y_lo = y_lo + 0.5f - sp[1]; y_hi = y_hi - 0.5f - sp[1];
+    const vi inside = (x_lo <= 0.0f) & (x_hi >= 0.0f) & (y_lo <= 0.0f) & (y_hi >= 0.0f);
+    auto q = [&](vf dx, vf dy) { return ca * dx * dx + 2.0f * cb * dx * dy + cc * dy * dy; };
+    auto clamp = [](vf v, vf lo, vf hi) { return v < lo ? lo : (hi < v ? hi : v); };
+    auto vmin = [](vf a, vf b) { return b < a ? b : a; };
+    vf q_min = vf{} + std::numeric_limits<float>::infinity();
+    q_min = vmin(q_min, q(x_lo, clamp(-cb * x_lo * inv_cc, y_lo, y_hi)));
+    q_min = vmin(q_min, q(x_hi, clamp(-cb * x_hi * inv_cc, y_lo, y_hi)));
+    q_min = vmin(q_min, q(clamp(-cb * y_lo * inv_ca, x_lo, x_hi), y_lo));
+    q_min = vmin(q_min, q(clamp(-cb * y_hi * inv_ca, x_lo, x_hi), y_hi));
+    const vi hit = inside | (q_min <= q_max);
+    for (int l = 0; l < W && b0 + l < area; ++l)
+      if (hit[l]) mask |= uint64_t(1) << (b0 + l);
+  }
+  return mask;
+}
+
+template <int W>
+WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree,
+                                        RasterState<float>* s, int64_t i0, int count) {
+  using vf = typename Lanes<W>::f;
+  using vi = typename Lanes<W>::i;
+  vf px, py, pz, sx, sy, sz, qw, qx, qy, qz;
+  for (int l = 0; l < W; ++l) {
+    const int64_t i = i0 + std::min(l, count - 1);  // the tail repeats the last Gaussian
+    px[l] = g.position[i * 3]; py[l] = g.position[i * 3 + 1]; pz[l] = g.position[i * 3 + 2];
+    sx[l] = g.log_scale[i * 3]; sy[l] = g.log_scale[i * 3 + 1]; sz[l] = g.log_scale[i * 3 + 2];
+    qw[l] = g.rotation[i * 4]; qx[l] = g.rotation[i * 4 + 1];
+    qy[l] = g.rotation[i * 4 + 2]; qz[l] = g.rotation[i * 4 + 3];
+  }
+  const Mat3<float>& R = cam.rotation;
+  const Vec3<float>& tr = cam.translation;
+  // Camera-space position (project_gaussian; its z is preprocess's culling depth, same sum).
+  const vf cx = sum3(R(0, 0), px, R(0, 1), py, R(0, 2), pz) + tr.x();
+  const vf cy = sum3(R(1, 0), px, R(1, 1), py, R(1, 2), pz) + tr.y();
+  const vf z = sum3(R(2, 0), px, R(2, 1), py, R(2, 2), pz) + tr.z();
+  const auto in_front = z > float(kNearPlane);
+
+  // covariance_3d: M = R(q) diag(exp(log_scale)), Sigma = M M^T.
+  auto exp_lane = [](float v) { return std::exp(v); };
+  sx = lanewise(sx, exp_lane); sy = lanewise(sy, exp_lane); sz = lanewise(sz, exp_lane);
+  const vf qn = lanewise((qw * qw + qy * qy) + (qx * qx + qz * qz), [](float v) { return std::sqrt(v); });
+  const auto q_ok = qn >= float(kMinQuatNorm);
+  const vf w = qw / qn, x = qx / qn, y = qy / qn, zq = qz / qn;
+  const vf one = vf{} + 1.0f, zero = vf{};
+  const vf r00 = q_ok ? 1.0f - 2.0f * (y * y + zq * zq) : one;
+  const vf r01 = q_ok ? 2.0f * (x * y - w * zq) : zero;
+  const vf r02 = q_ok ? 2.0f * (x * zq + w * y) : zero;
+  const vf r10 = q_ok ? 2.0f * (x * y + w * zq) : zero;
+  const vf r11 = q_ok ? 1.0f - 2.0f * (x * x + zq * zq) : one;
+  const vf r12 = q_ok ? 2.0f * (y * zq - w * x) : zero;
+  const vf r20 = q_ok ? 2.0f * (x * zq - w * y) : zero;
+  const vf r21 = q_ok ? 2.0f * (y * zq + w * x) : zero;
+  const vf r22 = q_ok ? 1.0f - 2.0f * (x * x + y * y) : one;
+  const vf m00 = r00 * sx, m01 = r01 * sy, m02 = r02 * sz;
+  const vf m10 = r10 * sx, m11 = r11 * sy, m12 = r12 * sz;
+  const vf m20 = r20 * sx, m21 = r21 * sy, m22 = r22 * sz;
+  const vf s00 = sum3(m00, m00, m01, m01, m02, m02), s01 = sum3(m00, m10, m01, m11, m02, m12);
+  const vf s02 = sum3(m00, m20, m01, m21, m02, m22), s11 = sum3(m10, m10, m11, m11, m12, m12);
+  const vf s12 = sum3(m10, m20, m11, m21, m12, m22), s22 = sum3(m20, m20, m21, m21, m22, m22);
+
+  // project_gaussian: mean, clamped Jacobian J, T = J R_cam, cov = (T Sigma) T^T + low-pass.
+  const vf iz = 1.0f / z;
+  const vf mean_x = cam.fx * cx * iz + cam.cx, mean_y = cam.fy * cy * iz + cam.cy;
+  const vf rx = cx * iz, ry = cy * iz;
+  const vf tx = (rx < cam.lim_x_lo ? vf{} + cam.lim_x_lo : (cam.lim_x_hi < rx ? vf{} + cam.lim_x_hi : rx)) * z;
+  const vf ty = (ry < cam.lim_y_lo ? vf{} + cam.lim_y_lo : (cam.lim_y_hi < ry ? vf{} + cam.lim_y_hi : ry)) * z;
+  const vf j00 = cam.fx * iz, j02 = -cam.fx * tx * iz * iz;
+  const vf j11 = cam.fy * iz, j12 = -cam.fy * ty * iz * iz;
+  vf t0[3], t1[3];
+  for (int k = 0; k < 3; ++k) {
+    t0[k] = j00 * R(0, k) + (0.0f * R(1, k) + j02 * R(2, k));
+    t1[k] = 0.0f * R(0, k) + (j11 * R(1, k) + j12 * R(2, k));
+  }
+  const vf sig[3][3] = {{s00, s01, s02}, {s01, s11, s12}, {s02, s12, s22}};
+  vf u0[3], u1[3];  // T Sigma
+  for (int k = 0; k < 3; ++k) {
+    u0[k] = sum3(t0[0], sig[0][k], t0[1], sig[1][k], t0[2], sig[2][k]);
+    u1[k] = sum3(t1[0], sig[0][k], t1[1], sig[1][k], t1[2], sig[2][k]);
+  }
+  const vf cov_a = sum3(u0[0], t0[0], u0[1], t0[1], u0[2], t0[2]) + float(kLowPass2d);
+  const vf cov_b = sum3(u0[0], t1[0], u0[1], t1[1], u0[2], t1[2]);
+  const vf cov_c = sum3(u1[0], t1[0], u1[1], t1[1], u1[2], t1[2]) + float(kLowPass2d);
+
+  // sh_to_color along view_direction.
+  const vf vx = px - cam.center_world.x(), vy = py - cam.center_world.y(), vz = pz - cam.center_world.z();
+  const vf len = lanewise(vx * vx + (vy * vy + vz * vz), [](float v) { return std::sqrt(v); });
+  const auto has_len = len > 0.0f;
+  const vf dx = has_len ? vx / len : zero, dy = has_len ? vy / len : zero, dz = has_len ? vz / len : zero;
+  vf b[kShCoeffs] = {};
+  b[0] = vf{} + float(kShC0);
+  if (degree >= 1) {
+    b[1] = -float(kShC1) * dy;
+    b[2] = float(kShC1) * dz;
+    b[3] = -float(kShC1) * dx;
+  }
+  if (degree >= 2) {
+    const vf xx = dx * dx, yy = dy * dy, zz = dz * dz;
+    b[4] = float(kShC2[0]) * dx * dy;
+    b[5] = float(kShC2[1]) * dy * dz;
+    b[6] = float(kShC2[2]) * (2.0f * zz - xx - yy);
+    b[7] = float(kShC2[3]) * dx * dz;
+    b[8] = float(kShC2[4]) * (xx - yy);
+    if (degree >= 3) {
+      b[9] = float(kShC3[0]) * dy * (3.0f * xx - yy);
+      b[10] = float(kShC3[1]) * dx * dy * dz;
+      b[11] = float(kShC3[2]) * dy * (4.0f * zz - xx - yy);
+      b[12] = float(kShC3[3]) * dz * (2.0f * zz - 3.0f * xx - 3.0f * yy);
+      b[13] = float(kShC3[4]) * dx * (4.0f * zz - xx - yy);
+      b[14] = float(kShC3[5]) * dz * (xx - yy);
+      b[15] = float(kShC3[6]) * dx * (xx - 3.0f * yy);
+    }
+  }
+  const int n_coeffs = (degree + 1) * (degree + 1);
+  vf col[3] = {vf{} + 0.5f, vf{} + 0.5f, vf{} + 0.5f};
+  for (int k = 0; k < n_coeffs; ++k)
+    for (int ch = 0; ch < 3; ++ch) {
+      vf coef;
+      for (int l = 0; l < W; ++l) coef[l] = g.sh[(i0 + std::min(l, count - 1)) * kShFloats + k * 3 + ch];
+      col[ch] += b[k] * coef;
+    }
+
+  // finish_gaussian, lane by lane the same operations, up to the tile mask.
+  vf rgb[3];
+  typename Lanes<W>::i clamped_bits = {};
+  for (int ch = 0; ch < 3; ++ch) {
+    const auto neg = col[ch] < 0.0f;
+    rgb[ch] = neg ? zero : col[ch];
+    clamped_bits |= neg & (1 << ch);
+  }
+  const vf det = cov_a * cov_c - cov_b * cov_b;
+  const vf mid = 0.5f * (cov_a + cov_c);
+  const vf gap = mid * mid - det;
+  const vf root = lanewise(float(kMinEigenGap) < gap ? gap : vf{} + float(kMinEigenGap),
+                           [](float v) { return std::sqrt(v); });
+  const vf hi_root = mid + root, lo_root = mid - root;
+  const vf lambda = hi_root < lo_root ? lo_root : hi_root;
+  const vf radius = lanewise(3.0f * lanewise(lambda, [](float v) { return std::sqrt(v); }),
+                             [](float v) { return std::ceil(v); });
+  const vf con_a = cov_c / det, con_b = -cov_b / det, con_c = cov_a / det;
+  auto finite = [](vf v) { return v - v == 0.0f; };
+  auto ok = in_front & (det > 0.0f) & finite(mean_x) & finite(mean_y) & finite(cov_a) & finite(cov_b) &
+            finite(cov_c) & finite(radius) & finite(con_a) & finite(con_b) & finite(con_c);
+  const vf cx0 = mean_x - 0.5f, cy0 = mean_y - 0.5f;
+  const vi x0 = tile_floor_v<W>(cx0 - radius, s->tiles_x), y0 = tile_floor_v<W>(cy0 - radius, s->tiles_y);
+  const vi x1 = tile_floor_v<W>(cx0 + radius + float(kTileSize - 1), s->tiles_x);
+  const vi y1 = tile_floor_v<W>(cy0 + radius + float(kTileSize - 1), s->tiles_y);
+  ok &= ((x1 - x0) * (y1 - y0) != 0) & finite(rgb[0]) & finite(rgb[1]) & finite(rgb[2]);
+  vf opacity, q_max;
+  for (int l = 0; l < W; ++l) {
+    opacity[l] = sigmoid(g.opacity_logit[i0 + std::min(l, count - 1)]);
+    q_max[l] = alpha_q_max(opacity[l]);
+  }
+  const auto no_alpha = q_max < 0.0f;
+  const vf ext_x = no_alpha ? vf{} - 1.0f : lanewise(q_max * cov_a, [](float v) { return std::sqrt(v); }) + 1.0f;
+  const vf ext_y = no_alpha ? vf{} - 1.0f : lanewise(q_max * cov_c, [](float v) { return std::sqrt(v); }) + 1.0f;
+  const vf q_lim = no_alpha ? vf{} - 1.0f : q_max * float(1.0001) + float(1e-3);
+  auto floor_v = [](vf v) { return lanewise(v, [](float u) { return std::floor(u); }); };
+  auto ceil_v = [](vf v) { return lanewise(v, [](float u) { return std::ceil(u); }); };
+  auto imax = [](vi a, vi b) { return a < b ? b : a; };
+  auto imin = [](vi a, vi b) { return b < a ? b : a; };
+  vi r0 = imax(x0, tile_floor_v<W>(ceil_v(mean_x - ext_x - 0.5f), s->tiles_x));
+  vi r1 = imax(y0, tile_floor_v<W>(ceil_v(mean_y - ext_y - 0.5f), s->tiles_y));
+  vi r2 = imin(x1, tile_floor_v<W>(floor_v(mean_x + ext_x - 0.5f) + float(kTileSize), s->tiles_x));
+  vi r3 = imin(y1, tile_floor_v<W>(floor_v(mean_y + ext_y - 0.5f) + float(kTileSize), s->tiles_y));
+  const auto empty = (ext_x < 0.0f) | (r2 <= r0) | (r3 <= r1);
+  r0 = empty ? vi{} : r0; r1 = empty ? vi{} : r1; r2 = empty ? vi{} : r2; r3 = empty ? vi{} : r3;
+  const vf inv_ca = 1.0f / con_a, inv_cc = 1.0f / con_c;
+
+  for (int l = 0; l < count; ++l) {
+    const int64_t i = i0 + l;
+    clear_gaussian(s, i);
+    if (!ok[l]) continue;
+    s->radius[i] = int32_t(std::min<float>(radius[l], float(std::numeric_limits<int32_t>::max() / 2)));
+    s->mean2d[i * 2] = mean_x[l]; s->mean2d[i * 2 + 1] = mean_y[l];
+    s->cov2d[i * 3] = cov_a[l]; s->cov2d[i * 3 + 1] = cov_b[l]; s->cov2d[i * 3 + 2] = cov_c[l];
+    s->conic[i * 3] = con_a[l]; s->conic[i * 3 + 1] = con_b[l]; s->conic[i * 3 + 2] = con_c[l];
+    s->opacity[i] = opacity[l];
+    for (int ch = 0; ch < 3; ++ch) s->color[i * 3 + ch] = rgb[ch][l];
+    s->clamped[i] = uint8_t(clamped_bits[l]);
+    s->depth[i] = z[l];
+    float* sp = &s->splat[i * kSplatFloats];
+    sp[0] = mean_x[l]; sp[1] = mean_y[l]; sp[2] = con_a[l]; sp[3] = con_b[l]; sp[4] = con_c[l];
+    sp[5] = opacity[l]; sp[6] = rgb[0][l]; sp[7] = rgb[1][l]; sp[8] = rgb[2][l];
+    sp[9] = ext_x[l]; sp[10] = ext_y[l]; sp[11] = q_lim[l];
+    int32_t* r = &s->rect[i * 4];
+    r[0] = r0[l]; r[1] = r1[l]; r[2] = r2[l]; r[3] = r3[l];
+    const int w = r[2] - r[0], h = r[3] - r[1], area = w * h;
+    if (area > 0 && area <= kMaskTiles) {
+      uint64_t mask = area == kMaskTiles ? ~uint64_t(0) : (uint64_t(1) << area) - 1;
+      if (w > 1 && h > 1) mask = tile_mask_v<W>(sp, inv_ca[l], inv_cc[l], r, area, s->width, s->height);
+      s->tile_mask[i] = mask;
+      if (mask == 0) r[0] = r[1] = r[2] = r[3] = 0;
+    }
+  }
+}
+
+template <int W>
+WGS_ALWAYS_INLINE void preprocess_range(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree,
+                                        RasterState<float>* s, int64_t lo, int64_t hi) {
+  for (int64_t i = lo; i < hi; i += W) preprocess_block<W>(g, cam, degree, s, i, int(std::min<int64_t>(W, hi - i)));
+}
+
+void preprocess_w4(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree, RasterState<float>* s,
+                   int64_t lo, int64_t hi) {
+  preprocess_range<4>(g, cam, degree, s, lo, hi);
+}
+#if defined(__x86_64__) && defined(__GNUC__)
+#define WGS_WIDE_PREPROCESS 1
+__attribute__((target("avx2"))) void preprocess_w8(const GaussianSet<float>& g, const RasterCamera<float>& cam,
+                                                   int degree, RasterState<float>* s, int64_t lo, int64_t hi) {
+  preprocess_range<8>(g, cam, degree, s, lo, hi);
+}
+#endif
+
+}  // namespace
+
+void preprocess_simd(const GaussianSet<float>& g, const RasterCamera<float>& cam, const RasterSettings<float>& settings,
+                     RasterState<float>* s) {
+  const int width = tile_kernel_width();
+  parallel_for_chunks(0, int64_t(g.size()), kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
+#ifdef WGS_WIDE_PREPROCESS
+    if (width == 8) return preprocess_w8(g, cam, settings.sh_degree, s, lo, hi);
+#endif
+    preprocess_w4(g, cam, settings.sh_degree, s, lo, hi);
+  });
+}
+
+}  // namespace weathergs::recon::internal
