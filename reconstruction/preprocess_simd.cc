@@ -15,19 +15,11 @@
 
 #include "core/parallel.h"
 #include "reconstruction/raster_internal.h"
-
-#pragma GCC diagnostic ignored "-Wpsabi"
-#define WGS_ALWAYS_INLINE inline __attribute__((always_inline))
+#include "reconstruction/simd_lanes.h"
 
 namespace weathergs::recon::internal {
 
 namespace {
-
-template <int W>
-struct Lanes {
-  typedef float f __attribute__((vector_size(4 * W)));
-  typedef int32_t i __attribute__((vector_size(4 * W)));
-};
 
 template <typename V, typename F>
 WGS_ALWAYS_INLINE V lanewise(V v, F fn) {

@@ -14,21 +14,11 @@
 #include <cstring>
 
 #include "reconstruction/raster_internal.h"
-
-// Every helper is inlined into its caller, so no vector crosses a call boundary: the ABI note GCC
-// gives for the 32- and 64-byte vectors of the default-target helpers does not apply.
-#pragma GCC diagnostic ignored "-Wpsabi"
-#define WGS_ALWAYS_INLINE inline __attribute__((always_inline))
+#include "reconstruction/simd_lanes.h"
 
 namespace weathergs::recon::internal {
 
 namespace {
-
-template <int W>
-struct Lanes {
-  typedef float f __attribute__((vector_size(4 * W)));
-  typedef int32_t i __attribute__((vector_size(4 * W)));
-};
 
 template <typename V>
 WGS_ALWAYS_INLINE V splat(float v) {
