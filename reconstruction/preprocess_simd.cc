@@ -88,9 +88,11 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
                                         RasterState<float>* s, int64_t i0, int count) {
   using vf = typename Lanes<W>::f;
   using vi = typename Lanes<W>::i;
+  int64_t lane[W];  // the Gaussian of each lane; the tail repeats the last one
+  for (int l = 0; l < W; ++l) lane[l] = i0 + std::min(l, count - 1);
   vf px, py, pz, sx, sy, sz, qw, qx, qy, qz;
   for (int l = 0; l < W; ++l) {
-    const int64_t i = i0 + std::min(l, count - 1);  // the tail repeats the last Gaussian
+    const int64_t i = lane[l];
     px[l] = g.position[i * 3]; py[l] = g.position[i * 3 + 1]; pz[l] = g.position[i * 3 + 2];
     sx[l] = g.log_scale[i * 3]; sy[l] = g.log_scale[i * 3 + 1]; sz[l] = g.log_scale[i * 3 + 2];
     qw[l] = g.rotation[i * 4]; qx[l] = g.rotation[i * 4 + 1];
@@ -184,7 +186,7 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   for (int k = 0; k < n_coeffs; ++k)
     for (int ch = 0; ch < 3; ++ch) {
       vf coef;
-      for (int l = 0; l < W; ++l) coef[l] = g.sh[(i0 + std::min(l, count - 1)) * kShFloats + k * 3 + ch];
+      for (int l = 0; l < W; ++l) coef[l] = g.sh[lane[l] * kShFloats + k * 3 + ch];
       col[ch] += b[k] * coef;
     }
 
@@ -216,7 +218,7 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   ok &= ((x1 - x0) * (y1 - y0) != 0) & finite(rgb[0]) & finite(rgb[1]) & finite(rgb[2]);
   vf opacity, q_max;
   for (int l = 0; l < W; ++l) {
-    opacity[l] = sigmoid(g.opacity_logit[i0 + std::min(l, count - 1)]);
+    opacity[l] = sigmoid(g.opacity_logit[lane[l]]);
     q_max[l] = alpha_q_max(opacity[l]);
   }
   const auto no_alpha = q_max < 0.0f;
