@@ -31,7 +31,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from weathergs_blender.builder import Builder  # noqa: E402
 from weathergs_blender.layouts import LAYOUTS  # noqa: E402
 from weathergs_blender.materials import build_material  # noqa: E402
-from weathergs_blender.render import (add_lens_drops, add_markers, add_particles, blender_from_opencv,  # noqa: E402
+from weathergs_blender.render import (CoverageMode, add_lens_drops, add_markers, add_particles, blender_from_opencv,  # noqa: E402
                                       intrinsics, opencv_from_blender, setup_lights, setup_render)
 from weathergs_blender.spec import Params, SpecError  # noqa: E402
 
@@ -80,7 +80,7 @@ def run(job):
     cam = bpy.data.objects.new("camera", cam_data)
     scene.collection.objects.link(cam)
     scene.camera = cam
-    lens_coll = add_lens_drops(job["lens_drops"], cam) if job.get("lens_drops") else None
+    lens_coll, plugs_coll, glass_coll = add_lens_drops(job["lens_drops"], cam) if job.get("lens_drops") else (None,) * 3
 
     render = job["render"]
     image_dir, depth_dir = job["outputs"]["images"], job["outputs"]["depth"]
@@ -89,6 +89,7 @@ def run(job):
     os.makedirs(os.path.join(out_dir, depth_dir), exist_ok=True)
     t_setup = time.time() - t0
 
+    coverage = CoverageMode(collection.name)
     views_out = []
     times = []
     W, H = render["width"], render["height"]
@@ -101,8 +102,12 @@ def run(job):
         scene.frame_set(frame)
         if particle_coll is not None:
             particle_coll.hide_render = not view.get("particles", True)
+        coverage.set(bool(view.get("coverage", False)))
         if lens_coll is not None:
             lens_coll.hide_render = not view.get("lens", True)
+        if glass_coll is not None:  # the cover glass, its holes plugged where no drop is shown
+            glass_coll.hide_render = not view.get("glass", True)
+            plugs_coll.hide_render = glass_coll.hide_render or not lens_coll.hide_render
         if render["engine"] == "cycles":
             scene.cycles.seed = view.get("seed", render["seed"])
         fo.file_slots[0].path = view["name"] + "_"

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "core/atomic_file.h"
@@ -22,9 +24,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-
 struct ManifestParticle {
-  std::string kind;
+  std::string id, kind;
   double radius_m = 0, camera_z_m = 0;
   Eigen::Vector3d p_world, v_world;
 };
@@ -44,6 +45,7 @@ std::vector<ManifestParticle> read_particles(const std::string& csv, const std::
     while (std::getline(s, f, ',')) cols.push_back(f);
     if (cols.size() != 11) throw InputError(csv + ":" + std::to_string(n), "expected 11 columns");
     ManifestParticle p;
+    p.id = cols[0];
     p.kind = kind;
     p.radius_m = 0.5e-3 * std::stod(cols[2]);  // visual diameter
     p.p_world = {std::stod(cols[3]), std::stod(cols[4]), std::stod(cols[5])};
@@ -156,6 +158,10 @@ void CyclesValidationOptions::validate() const {
   if (blender_script.empty()) throw InputError("blender_script", "required (blender_scripts/render_scene.py)");
   if (samples < 1) throw InputError("samples", "expected >= 1, got " + std::to_string(samples));
   if (nearest < 1) throw InputError("nearest", "expected >= 1, got " + std::to_string(nearest));
+  if (!(glass_thickness_m >= 0 && glass_thickness_m <= 0.01))
+    throw InputError("glass_thickness_m", "expected 0 (no plate) to 0.01 m, got " + std::to_string(glass_thickness_m));
+  if (!(glass_refractive_index >= 1 && glass_refractive_index <= 2.5))
+    throw InputError("glass_refractive_index", "expected 1 to 2.5, got " + std::to_string(glass_refractive_index));
 }
 
 Json validate_against_cycles(const CyclesValidationOptions& o) {
@@ -190,12 +196,29 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   };
   Json items = Json::array();
   double weather_seconds = 0;
+  // Cycles renders the particles of the reference dataset when one is given: the same weather with a
+  // lower visibility cutoff or near clip, so the light the generator leaves out is in the reference.
+  const std::string ref_root = o.reference_dataset.empty() ? ds.root : read_dataset(o.reference_dataset).root;
+  if (lens && ref_root != ds.root) throw InputError("reference_dataset", "applies to the particle layers only");
   for (const char* species : {"rain", "snow"}) {
     if (lens) break;
     const std::string csv = ds.root + "/layers/particles_" + species + "/" + o.view + ".csv";
     if (!fs::exists(csv)) continue;
     species_present.push_back(species);
-    for (const ManifestParticle& p : read_particles(csv, species)) {
+    std::vector<ManifestParticle> drawn = read_particles(csv, species);
+    if (ref_root != ds.root) {
+      const std::string ref_csv = ref_root + "/layers/particles_" + species + "/" + o.view + ".csv";
+      std::vector<ManifestParticle> ref = read_particles(ref_csv, species);
+      std::set<std::string> ref_ids;
+      for (const ManifestParticle& p : ref) ref_ids.insert(p.id);
+      for (const ManifestParticle& p : drawn)
+        if (!ref_ids.count(p.id))
+          throw InputError(ref_csv, "lacks particle " + p.id + " of " + csv +
+                                        ": the reference must be the same weather (spec, seed, view) drawn with a "
+                                        "lower visibility_cutoff or near_m");
+      drawn = std::move(ref);
+    }
+    for (const ManifestParticle& p : drawn) {
       particles.push_back(p);
       items.push_back({{"kind", p.kind},
                        {"radius_m", p.radius_m},
@@ -219,24 +242,48 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
                            {"sphere_radius_m", 1e-3 * d.at("sphere_radius_mm").get<double>()},
                            {"contact_angle_deg", d.at("contact_angle_deg")}});
     lens_job = {{"refractive_index", spec.at("refractive_index")}, {"drops", items}};
+    // The cover glass and the camera's front, sized to the view at the glass plus the lens aperture and
+    // a margin (a larger pane centimetres from the camera could shade the scene near it from the sun).
+    const double z = spec.at("glass_distance_m").get<double>();
+    const double half_fov = std::max(0.5 * cam.width / cam.fx, 0.5 * cam.height / cam.fy);
+    const double aperture = cam.f_number && cam.focal_length_mm ? 0.5e-3 * *cam.focal_length_mm / *cam.f_number : 0.0;
+    const double half_size = 1.5 * z * half_fov + aperture + 2e-3;
+    if (o.glass_thickness_m > 0)
+      lens_job["glass_plate"] = {{"thickness_m", o.glass_thickness_m},
+                                 {"refractive_index", o.glass_refractive_index},
+                                 {"glass_distance_m", z},
+                                 {"half_size_m", half_size}};
+    if (o.camera_body) lens_job["camera_body"] = {{"half_size_m", half_size}};
     weather_seconds = stage_seconds("lens_droplets");
   }
   if (items.empty()) throw InputError(o.dataset, "no particles or lens drops recorded for view " + o.view);
 
   // The third render repeats the weather view with another sampling seed: the PSNR between the two
   // Cycles layers is the Monte Carlo noise floor of the reference itself.
-  Camera plain = cam, weather = cam, plain2 = cam, weather2 = cam;
+  // A fifth render (particles only) gives their coverage: opaque white particles over a transparent
+  // film, the scene a holdout (blender_scripts: CoverageMode).
+  Camera plain = cam, weather = cam, plain2 = cam, weather2 = cam, coverage = cam;
   plain.name = o.view + "_plain";
   weather.name = o.view + "_weather";
   plain2.name = o.view + "_plain_seed2";
   weather2.name = o.view + "_weather_seed2";
+  coverage.name = o.view + "_coverage";
   fs::create_directories(o.out_dir);
   const std::string raw = fs::absolute(o.out_dir).string() + "/render";
-  Json job = blender_job(scene, variant, profile, {plain, weather, plain2, weather2}, {});
+  std::vector<Camera> views = {plain, weather, plain2, weather2};
+  if (!lens) views.push_back(coverage);
+  // With a cover glass, a sixth render without it gives the glass's transmission (below).
+  const bool glass = lens && o.glass_thickness_m > 0;
+  Camera no_glass = cam;
+  no_glass.name = o.view + "_plain_no_glass";
+  if (glass) views.push_back(no_glass);
+  Json job = blender_job(scene, variant, profile, views, {});
   for (int i = 0; i < 4; ++i) {
     job["camera"]["views"][i][lens ? "lens" : "particles"] = i % 2 == 1;
     job["camera"]["views"][i]["seed"] = i < 2 ? 0 : 1;
   }
+  if (!lens) job["camera"]["views"][4]["coverage"] = true;
+  if (glass) job["camera"]["views"][4]["lens"] = false, job["camera"]["views"][4]["glass"] = false;
   if (lens) {
     job["lens_drops"] = lens_job;
     // The drops sit centimetres from the pinhole: inside the scene renders' near clip.
@@ -278,14 +325,31 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   const double cycles_weather_s = log["view_seconds"][1].get<double>();
 
   auto cycles = [&](const Camera& c) { return read_image(raw + "/clean/" + c.name + ".exr"); };
-  const Image lc = difference(cycles(weather), cycles(plain));
-  const Image lc2 = difference(cycles(weather2), cycles(plain2));
+  Image lc = difference(cycles(weather), cycles(plain));
+  Image lc2 = difference(cycles(weather2), cycles(plain2));
+  // The dataset's clean view is what the camera sees without drops, through its cover glass (the
+  // generator's convention): the glass's transmission T is in it. Ours was rendered without a glass,
+  // so the Cycles layers (seen through it) are divided by T, measured as the ratio of the plain
+  // renders with and without the glass (the same sampling seed).
+  double glass_transmission = 1;
+  if (glass) {
+    const Image with = cycles(plain), without = cycles(no_glass);
+    double a = 0, b = 0;
+    for (size_t i = 0; i < with.data.size(); ++i) a += with.data[i], b += without.data[i];
+    if (!(a > 0 && b > 0)) throw InputError(raw, "the plain Cycles renders are black: cannot measure the glass's transmission");
+    glass_transmission = a / b;
+    for (float& v : lc.data) v = float(v / glass_transmission);
+    for (float& v : lc2.data) v = float(v / glass_transmission);
+  }
   // The C++ layer in float: the stages' compositing, (1 - A) below + A L per species in stage order,
   // replayed from the float layers on the clean view. (The 8-bit images would quantize the faint
   // physical streaks away.)
   const Image clean = to_linear(to_rgb(read_image(ds.path(ImageKind::kClean, o.view))));
   // Lens drops change the image by far more than an 8-bit level: their layer is images - clean.
   Image composite = lens ? to_linear(to_rgb(read_image(ds.path(ImageKind::kImages, o.view)))) : clean;
+  // The particles' coverage, 1 - prod(1 - alpha) over the species (3 equal channels, as Cycles').
+  Image coverage_cpp(clean.width, clean.height, 3);
+  std::fill(coverage_cpp.data.begin(), coverage_cpp.data.end(), 1.f);
   for (const std::string& species : species_present) {
     const std::string light_path = ds.root + "/layers/" + species + "_radiance/" + o.view + ".exr";
     if (!fs::exists(light_path))
@@ -297,8 +361,10 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
       for (int c = 0; c < 3; ++c) {
         float& v = composite.data[p * 3 + c];
         v = (1 - alpha.data[p]) * v + alpha.data[p] * light.data[p * 3 + c];
+        coverage_cpp.data[p * 3 + c] *= 1 - alpha.data[p];
       }
   }
+  for (float& v : coverage_cpp.data) v = 1 - v;
   const Image lp = difference(composite, clean);
 
   const Image bc = box4(lc), bc2 = box4(lc2), bp = box4(lp);
@@ -342,7 +408,8 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   std::stable_sort(order.begin(), order.end(),
                    [&](size_t x, size_t y) { return particles[x].camera_z_m < particles[y].camera_z_m; });
   Json streaks = Json::array();
-  std::vector<double> end_errors;
+  std::vector<double> end_errors, coverage_end_errors;
+  const Image coverage_cycles = lens ? Image() : cycles(coverage);
   auto inside = [&](const Eigen::Vector2d& u) { return u.x() >= 0 && u.y() >= 0 && u.x() < cam.width && u.y() < cam.height; };
   for (size_t i : order) {
     if (int(streaks.size()) >= o.nearest) break;
@@ -357,21 +424,35 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
     if (!ec.found || !ep.found) continue;
     const double err = std::max(std::abs(ec.start_px - ep.start_px), std::abs(ec.end_px - ep.end_px));
     end_errors.push_back(err);
+    // The same quantiles on the coverage: where the particle is, whatever light it shows.
+    const Extent cc = streak_extent(coverage_cycles, *capsules[i], shared);
+    const Extent cp = streak_extent(coverage_cpp, *capsules[i], shared);
+    const double cov_err = cc.found && cp.found
+                               ? std::max(std::abs(cc.start_px - cp.start_px), std::abs(cc.end_px - cp.end_px))
+                               : std::numeric_limits<double>::infinity();  // one side sees nothing: a miss
+    coverage_end_errors.push_back(cov_err);
     streaks.push_back({{"kind", particles[i].kind},
                        {"camera_z_m", particles[i].camera_z_m},
                        {"path_px", (capsules[i]->b - capsules[i]->a).norm()},
                        {"cycles_px", {ec.start_px, ec.end_px}},
                        {"cpp_px", {ep.start_px, ep.end_px}},
-                       {"max_end_error_px", err}});
+                       {"max_end_error_px", err},
+                       {"cycles_coverage_px", {cc.start_px, cc.end_px}},
+                       {"cpp_coverage_px", {cp.start_px, cp.end_px}},
+                       {"max_coverage_end_error_px", std::isfinite(cov_err) ? Json(cov_err) : Json(nullptr)}});
   }
-  std::vector<double> sorted = end_errors;
-  std::sort(sorted.begin(), sorted.end());
-  const double median_err = sorted.empty() ? 0 : sorted[sorted.size() / 2];
-  const double max_err = sorted.empty() ? 0 : sorted.back();
+  auto median_and_max = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? std::pair<double, double>{0, 0} : std::pair<double, double>{v[v.size() / 2], v.back()};
+  };
+  const auto [median_err, max_err] = median_and_max(end_errors);
+  const auto [cov_median_err, cov_max_err] = median_and_max(coverage_end_errors);
+  auto finite_or_null = [](double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); };
 
   const double cpp_per_view_s = weather_seconds / double(ds.cameras.size());
   const double psnr_box = psnr_of(mse_of(bc, &bp)), psnr_box_zero = psnr_of(mse_of(bc, nullptr));
   Json result = {{"dataset", ds.info.name},
+                       {"reference_particles_from", ref_root},
                        {"layer", lens ? "lens_droplets" : "particles"},
                        {"view", o.view},
                        {lens ? "lens_drops" : "particles", items.size()},
@@ -395,14 +476,22 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
                        {"streaks_compared", streaks.size()},
                        {"streak_end_error_median_px", median_err},
                        {"streak_end_error_max_px", max_err},
+                       {"coverage_streak_end_error_median_px", finite_or_null(cov_median_err)},
+                       {"coverage_streak_end_error_max_px", finite_or_null(cov_max_err)},
                        {"streaks", streaks},
                        {"cycles_seconds_with_particles", cycles_weather_s},
                        {"cycles_seconds_plain", cycles_plain_s},
                        {"cpp_weather_seconds_per_view", cpp_per_view_s},
                        {"time_ratio_cycles_over_cpp", cycles_weather_s / std::max(cpp_per_view_s, 1e-9)}};
   if (lens)
-    for (const char* key : {"streaks", "streaks_compared", "streak_end_error_median_px", "streak_end_error_max_px"})
+    for (const char* key : {"streaks", "streaks_compared", "streak_end_error_median_px", "streak_end_error_max_px",
+                            "coverage_streak_end_error_median_px", "coverage_streak_end_error_max_px"})
       result.erase(key);
+  if (lens) {
+    result["glass_plate_mm"] = 1e3 * o.glass_thickness_m;
+    result["glass_transmission"] = glass_transmission;
+    result["camera_body"] = o.camera_body;
+  }
   write_file_atomic(o.out_dir + "/result.json", result.dump(1));
   return result;
 }

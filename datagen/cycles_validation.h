@@ -2,8 +2,11 @@
 // "Path-tracer validation").
 //
 // Lens drops (a dataset whose spec has lens_droplets alone, attached to the lens, untilted, on the
-// scene side): the view's drops from dataset.json go to Blender as water caps closed by their base,
-// parented to the camera, with the camera's depth of field when the effect defocuses; the C++ layer is
+// scene side): the view's drops from dataset.json go to Blender as water caps closed by their base on
+// a cover-glass slab (glass_thickness_m; both parented to the camera), in front of the camera's dark
+// body (camera_body), with the camera's depth of field when the effect defocuses; the Cycles layers
+// are divided by the glass's transmission (a render without it: the dataset's clean view is seen
+// through the glass); the C++ layer is
 // images - clean (the drops change far more than an 8-bit level). Particles: a dataset made by
 // `weathergs generate` or `weathergs weather` with rain and/or snow only, with the generator's
 // particle manifests and float layers: the view's particles (position at shutter open,
@@ -12,7 +15,9 @@
 // and without them (same sampling seed, so the noise of paths that miss every particle cancels), with
 // motion blur, float output, and depth of field when the generator defocuses. A third and fourth
 // render repeat the pair with another seed: the reference's own noise floor. The weather layers
-// weathered - clean (linear RGB, float on both sides) are compared.
+// weathered - clean (linear RGB, float on both sides) are compared. A fifth render gives the
+// particles' coverage alone (opaque emitters, the scene a holdout): the streaks' extent is measured
+// on it against the generator's alpha layers, as well as on the layers themselves.
 #pragma once
 
 #include <string>
@@ -30,7 +35,20 @@ struct CyclesValidationOptions {
   std::string blender = "blender";
   std::string blender_script;     // blender_scripts/render_scene.py (required)
   std::string scene_spec;         // default: the dataset's generator.scene_spec (relative to the cwd)
+  // Particles: Cycles renders this dataset's particles instead (the same weather, spec and seed, drawn
+  // with a lower visibility_cutoff or near_m: a superset of `dataset`'s, checked by particle id), so
+  // the comparison includes the light the generator's cutoffs leave out. Empty: `dataset` itself.
+  std::string reference_dataset;
   bool reuse_renders = false;     // keep out_dir's Cycles renders when they were made from the same job
+  // Lens drops: the cover glass they sit on, modelled in the reference as a slab on the camera side
+  // of the drops (the generator's glass is a plane: a parallel plate turns no ray, it only shifts
+  // rays sideways and reflects a few percent). 1 mm of crown glass (n 1.52, BK7's at 587 nm) is our
+  // choice of a typical cover; 0 leaves the plate out (the reference before 2026-11-26).
+  double glass_thickness_m = 1e-3;
+  double glass_refractive_index = 1.52;
+  // Lens drops: a dark camera front 1 mm behind the aperture, so light the drops or the glass send back
+  // towards the camera meets the camera (as on a real one), not the sky behind an invisible camera.
+  bool camera_body = true;
   void validate() const;          // InputError naming the field
 };
 
@@ -41,7 +59,11 @@ struct CyclesValidationOptions {
 // its noise variance removed), energy_ratio_cpp_over_cycles, mean_layer_{cycles,cpp},
 // streak_end_error_{median,max}_px over `streaks` (10%/90% quantiles of each streak's |layer| along
 // its projected path; the nearest `nearest` particles with both ends in the image and at most half of
-// their capsule under other particles' streaks), the seconds of both renderers and their ratio.
+// their capsule under other particles' streaks), coverage_streak_end_error_{median,max}_px (the same
+// quantiles of the coverage: Cycles' coverage render against 1 - prod(1 - alpha) of the generator's
+// alpha layers; null when one side shows nothing of a streak), the seconds of both renderers and their
+// ratio. Lens drops: no streak figures; glass_plate_mm, glass_transmission and camera_body record the
+// reference's glass and body.
 Json validate_against_cycles(const CyclesValidationOptions& options);
 
 }  // namespace weathergs::datagen

@@ -236,36 +236,172 @@ def add_lens_drops(lens, camera):
     """Water drops on the cover glass for the path-tracer validation of the lens-drop layer
     (docs/lens_droplets.md): each drop a spherical cap closed by its flat base, water (glass BSDF,
     IOR lens["refractive_index"]), built in OpenCV camera coordinates from the generator's drop list
-    and parented to the camera. No glass plate: a thin parallel plate turns no ray (the generator's
-    model), and a water base coincident with a glass face would leave Cycles two surfaces at one depth.
-    Returns the collection (hidden per view with "lens": false)."""
+    and parented to the camera.
+
+    With lens["glass_plate"] ({"thickness_m", "refractive_index", "half_size_m"}) the cover glass is
+    there too: a slab on the camera side of the drops whose outer face has a hole under each drop.
+    Cycles tracks no nested media, so every surface carries the index ratio of the two media it
+    separates, its normal pointing into the first: the slab's faces air/glass, a drop's base
+    glass/water (normal towards the camera, ratio n_water / n_glass), its cap water/air. Where no drop
+    sits (views with "lens": false) plugs of glass/air fill the holes. Without a plate the base is
+    air/water (the generator's thin glass). lens["camera_body"] ({"half_size_m"}) adds the camera's
+    dark front around the lens. Returns (drops, plugs, plate) collections; plugs and plate
+    are None without a plate."""
     coll = bpy.data.collections.new("lens_drops")
     bpy.context.scene.collection.children.link(coll)
-    water = water_material("lens_water", lens["refractive_index"])
+    n_water = lens["refractive_index"]
+    water = water_material("lens_water", n_water)
+    plate = lens.get("glass_plate")
+    if plate:
+        n_glass = plate["refractive_index"]
+        interface = water_material("glass_water", n_water / n_glass)
+    rings = []  # per drop: its base polygon (OpenCV camera coordinates), shared with the plate's holes
+
+    def to_blender(bm):
+        for v in bm.verts:  # OpenCV camera -> Blender camera axes (x, -y, -z): a rotation, no mirror
+            v.co = Vector((v.co.x, -v.co.y, -v.co.z))
+
+    def orient(bm, want):  # want(face) -> the direction its normal must take (OpenCV frame)
+        bm.normal_update()
+        flip = [f for f in bm.faces if f.normal.dot(want(f)) < 0]
+        if flip:
+            bmesh.ops.reverse_faces(bm, faces=flip)
+
+    def new_object(name, bm, materials, parent_coll):
+        to_blender(bm)
+        bm.normal_update()
+        mesh = bpy.data.meshes.new(name)
+        bm.to_mesh(mesh)
+        bm.free()
+        for m in materials:
+            mesh.materials.append(m)
+        obj = bpy.data.objects.new(name, mesh)
+        obj.parent = camera
+        parent_coll.objects.link(obj)
+        return obj
+
+    cz = None
     for i, d in enumerate(lens["drops"]):
-        cx, cy, cz = d["base_center_camera_m"]  # OpenCV camera frame; the glass is the plane z = cz
+        cx, cy, dz = d["base_center_camera_m"]  # OpenCV camera frame; the glass is the plane z = dz
+        if cz is None:
+            cz = dz
+        elif plate and abs(dz - cz) > 1e-12:
+            raise ValueError("glass_plate: the drops' bases must lie on one untilted glass plane")
         R = d["sphere_radius_m"]
         theta = math.radians(d["contact_angle_deg"])
         bm = bmesh.new()
         bmesh.ops.create_uvsphere(bm, u_segments=96, v_segments=48, radius=R)
         # The ball's centre lies R cos(theta) behind the glass (towards the camera) for a cap bulging
         # towards the scene; keep what is beyond the glass and close it with the flat base.
-        bmesh.ops.translate(bm, verts=bm.verts, vec=(cx, cy, cz - R * math.cos(theta)))
+        bmesh.ops.translate(bm, verts=bm.verts, vec=(cx, cy, dz - R * math.cos(theta)))
         cut = bmesh.ops.bisect_plane(bm, geom=bm.verts[:] + bm.edges[:] + bm.faces[:], dist=1e-9,
-                                     plane_co=(0.0, 0.0, cz), plane_no=(0.0, 0.0, 1.0), clear_inner=True)
+                                     plane_co=(0.0, 0.0, dz), plane_no=(0.0, 0.0, 1.0), clear_inner=True)
         edges = [e for e in cut["geom_cut"] if isinstance(e, bmesh.types.BMEdge)]
-        bmesh.ops.edgeloop_fill(bm, edges=edges)
-        for v in bm.verts:  # OpenCV camera -> Blender camera axes (x, -y, -z)
-            v.co = Vector((v.co.x, -v.co.y, -v.co.z))
-        bm.normal_update()  # recalc_face_normals orients by the stored normals: refresh them first
-        bmesh.ops.recalc_face_normals(bm, faces=bm.faces)
+        fill = bmesh.ops.edgeloop_fill(bm, edges=edges)
+        base = [f for f in fill["faces"]]
+        rings.append([(e.verts[0].co.copy(), e.verts[1].co.copy()) for e in edges])
+        centre = Vector((cx, cy, dz - R * math.cos(theta)))
+        # Cap faces point away from the ball's centre (into the air), the base towards the camera.
+        orient(bm, lambda f: Vector((0.0, 0.0, -1.0)) if f in base else f.calc_center_median() - centre)
         for f in bm.faces:
-            f.smooth = len(f.verts) < 5  # the base polygon stays flat
-        mesh = bpy.data.meshes.new(f"lens_drop{i}")
-        bm.to_mesh(mesh)
-        bm.free()
-        mesh.materials.append(water)
-        obj = bpy.data.objects.new(f"lens_drop{i}", mesh)
-        obj.parent = camera
-        coll.objects.link(obj)
-    return coll
+            f.smooth = f not in base  # the base polygon stays flat
+            f.material_index = 1 if (plate and f in base) else 0
+        new_object(f"lens_drop{i}", bm, [water, interface] if plate else [water], coll)
+    body = lens.get("camera_body")
+    if body:
+        # The camera's body around the lens: what the drops and the glass send back towards the camera
+        # meets it (dark), not the sky behind an invisible camera. A black square 1 mm behind the
+        # aperture: it meets no camera ray and, that small, shades nothing of the scene measurably.
+        housing = bpy.data.materials.new("camera_body")
+        housing.use_nodes = True
+        bsdf = housing.node_tree.nodes["Principled BSDF"]
+        bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+        bsdf.inputs["Specular"].default_value = 0.0
+        bm = bmesh.new()
+        b = body["half_size_m"]
+        bm.faces.new([bm.verts.new((x, y, -1e-3)) for x, y in [(-b, -b), (b, -b), (b, b), (-b, b)]])
+        orient(bm, lambda f: Vector((0.0, 0.0, 1.0)))
+        new_object("camera_body", bm, [housing], bpy.context.scene.collection)
+    if not plate:
+        return coll, None, None
+
+    glass = water_material("cover_glass", n_glass)
+    plate_coll = bpy.data.collections.new("cover_glass")
+    bpy.context.scene.collection.children.link(plate_coll)
+    plugs_coll = bpy.data.collections.new("cover_glass_plugs")
+    bpy.context.scene.collection.children.link(plugs_coll)
+    if cz is None:
+        cz = plate["glass_distance_m"]
+    h, near = plate["half_size_m"], cz - plate["thickness_m"]
+    bm = bmesh.new()
+    corners = [(-h, -h), (h, -h), (h, h), (-h, h)]
+    vn = [bm.verts.new((x, y, near)) for x, y in corners]
+    vf = [bm.verts.new((x, y, cz)) for x, y in corners]
+    bm.faces.new(vn)
+    for k in range(4):
+        bm.faces.new((vn[k], vn[(k + 1) % 4], vf[(k + 1) % 4], vf[k]))
+    outline = [bm.edges.get((vf[k], vf[(k + 1) % 4])) for k in range(4)]  # made with the side faces
+    holes = []
+    for ring in rings:
+        verts = {}
+        def vert(co):
+            key = (round(co.x, 12), round(co.y, 12))
+            if key not in verts:
+                verts[key] = bm.verts.new(co)
+            return verts[key]
+        holes += [bm.edges.new((vert(a), vert(b))) for a, b in ring]
+    # The outer face: the square minus the drops' bases (scanfill treats nested loops as holes).
+    bmesh.ops.triangle_fill(bm, use_beauty=True, use_dissolve=False, edges=outline + holes)
+    middle = Vector((0.0, 0.0, 0.5 * (near + cz)))
+    orient(bm, lambda f: Vector((0.0, 0.0, -1.0)) if abs(f.calc_center_median().z - near) < 1e-12
+           else Vector((0.0, 0.0, 1.0)) if abs(f.calc_center_median().z - cz) < 1e-12
+           else f.calc_center_median() - middle)
+    new_object("cover_glass", bm, [glass], plate_coll)
+    for i, ring in enumerate(rings):  # glass/air where the drops' bases would be
+        bm = bmesh.new()
+        verts = {}
+        def vert(co):
+            key = (round(co.x, 12), round(co.y, 12))
+            if key not in verts:
+                verts[key] = bm.verts.new(co)
+            return verts[key]
+        edges = [bm.edges.new((vert(a), vert(b))) for a, b in ring]
+        bmesh.ops.edgeloop_fill(bm, edges=edges)
+        orient(bm, lambda f: Vector((0.0, 0.0, 1.0)))
+        new_object(f"cover_glass_plug{i}", bm, [glass], plugs_coll)
+    return coll, plugs_coll, plate_coll
+
+class CoverageMode:
+    """Per-view switch for the particles' coverage render of the path-tracer validation: a view with
+    "coverage": true renders every particle as an opaque white emitter over a transparent film, the
+    scene's geometry as a holdout (it occludes particles behind it and shows nothing itself). The
+    float image's RGB (premultiplied) is then the fraction of the exposure and of the lens aperture
+    during which a particle covers the pixel: Garg and Nayar's tau / T, the quantity the generator's
+    alpha layer holds, free of any shading."""
+
+    def __init__(self, scene_collection_name):
+        self.name = scene_collection_name
+        self.white = None
+        self.exposure = None  # the render's own, restored after a coverage view
+
+    def set(self, on):
+        scene = bpy.context.scene
+        layer = bpy.context.view_layer
+        if on and self.white is None:
+            mat = bpy.data.materials.new("coverage_white")
+            mat.use_nodes = True
+            nt = mat.node_tree
+            nt.nodes.clear()
+            em = nt.nodes.new("ShaderNodeEmission")
+            em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+            em.inputs["Strength"].default_value = 1.0
+            out = nt.nodes.new("ShaderNodeOutputMaterial")
+            nt.links.new(em.outputs[0], out.inputs["Surface"])
+            self.white = mat
+        scene.render.film_transparent = on
+        layer.material_override = self.white if on else None
+        layer.layer_collection.children[self.name].holdout = on
+        if self.exposure is None:
+            self.exposure = scene.view_settings.exposure
+        scene.view_settings.exposure = 0.0 if on else self.exposure  # coverage 1 -> pixel value 1
+
