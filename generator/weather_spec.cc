@@ -380,6 +380,12 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
     // against Cycles"); the paper style keeps the view's mean its suite was generated with.
     if (spec.style == WeatherStyle::kPhysical && !effects.child("lens_droplets").has("environment_radiance"))
       spec.lens_droplets->environment_sky = true;
+    // Physical style, drops on the lens: light sent back towards the camera meets its dark front (a
+    // black camera body in the Cycles reference; sky there instead: -2.0 dB against +7.7 dB,
+    // benchmarks/README.md, "The cover glass and the camera's body").
+    if (spec.style == WeatherStyle::kPhysical && spec.lens_droplets->attach == lens::Attach::kLens &&
+        !effects.child("lens_droplets").has("camera_radiance"))
+      spec.lens_droplets->camera_radiance = std::array<double, 3>{0, 0, 0};
   } else {
     effects.mark("lens_droplets");
   }

@@ -401,7 +401,8 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
   const GlassPlane& plane = scene.plane();
   const double eta_water = options.refractive_index;
   Eigen::Vector3d o = o0, d = d0.normalized();
-  double w = 1;  // weight of the followed path; the rest went to the environment
+  double w = 1;  // weight of the followed path; the rest went to the environment or the camera
+  double w_camera = 0;  // light sent back towards the camera: reflected from the dry side, or exiting backwards
   bool in_water = false;
   int skip_prim = -1, bounces = 0;
   // Every boundary event either changes medium or counts a bounce, so this only stops a ray that
@@ -463,6 +464,9 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
       ++res.internal_reflections;
     } else {
       e.reflectance = reflectance;
+      // A reflection from the dry side leaves the drop at once: when it heads back (towards the camera's
+      // side of the image plane) it meets the camera. Reflections inside the water are not followed.
+      if (!in_water && reflect(d, n_facing).z() <= kMinForwardZ) w_camera += w * reflectance;
       w *= 1 - reflectance;
       d = *refracted;
       in_water = !in_water;
@@ -484,12 +488,14 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
     res.scene_weight = 1;
     return res;
   }
-  if (w > 0 && d.z() <= kMinForwardZ) {
+  if (w > 0 && d.z() <= kMinForwardZ) {  // leaves backwards: towards the camera
+    w_camera += w;
     w = 0;
   }
   // Everything not followed (Fresnel reflections, cut paths) is the exact complement of w.
   res.scene_weight = std::clamp(w, 0.0, 1.0);
-  res.environment_weight = 1.0 - res.scene_weight;
+  res.camera_weight = std::clamp(w_camera, 0.0, 1.0 - res.scene_weight);
+  res.environment_weight = 1.0 - res.scene_weight - res.camera_weight;
   return res;
 }
 

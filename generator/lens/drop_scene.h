@@ -122,6 +122,7 @@ struct PathResult {
   Eigen::Vector3d exit_direction = Eigen::Vector3d::UnitZ();  // camera frame, unit
   double scene_weight = 0;        // of the scene radiance along exit_direction
   double environment_weight = 0;  // of the environment radiance (reflections, paths cut short)
+  double camera_weight = 0;       // of light sent back towards the camera (see trace_path)
   int internal_reflections = 0;
   int boundary_queries = 0;  // Embree ray casts made for this path
 };
@@ -135,7 +136,9 @@ struct TraceOptions {
 // and Fresnel at every air-water boundary (the thin glass does not change directions: parallel
 // interfaces conserve n sin(theta)), total internal reflection up to max_bounces times. Light
 // reflected at a boundary and not followed (Fresnel reflections, paths cut at max_bounces) takes the
-// environment radiance, so scene_weight + environment_weight = 1 for a path that touched water.
+// environment radiance, except light sent back towards the camera (a reflection from the dry side
+// heading backwards, a path leaving the water backwards): camera_weight, which meets the camera
+// itself. scene_weight + environment_weight + camera_weight = 1 for a path that touched water.
 PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                       const TraceOptions& options, std::vector<PathEvent>* events = nullptr);
 

@@ -265,6 +265,11 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
     environment = sum / double(image.num_pixels());
   }
 
+  const Eigen::Vector3d camera_radiance =
+      spec_.camera_radiance ? Eigen::Vector3d((*spec_.camera_radiance)[0], (*spec_.camera_radiance)[1],
+                                              (*spec_.camera_radiance)[2])
+                            : environment;
+
   TraceOptions topt;
   topt.refractive_index = spec_.refractive_index;
   topt.max_bounces = spec_.max_bounces;
@@ -305,7 +310,7 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
         row_embree[ty] += path.boundary_queries;
         if (!path.touched_water) continue;
         ++covered;
-        Eigen::Vector3d l = path.environment_weight * environment;
+        Eigen::Vector3d l = path.environment_weight * environment + path.camera_weight * camera_radiance;
         if (path.scene_weight > 0) {
           const Eigen::Vector3d& e = path.exit_direction;
           l += path.scene_weight * sample_bilinear(image, camera.fx * e.x() / e.z() + camera.cx,

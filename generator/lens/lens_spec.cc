@@ -75,6 +75,16 @@ LensDropletSpec parse_lens_droplet_spec(const JsonReader& r) {
   } else {
     r.mark("environment_radiance");
   }
+  if (r.has("camera_radiance") && r.value()["camera_radiance"].is_string()) {
+    if (r.get<std::string>("camera_radiance") != "environment")
+      throw InputError(r.where("camera_radiance"), "expected \"environment\" or [r, g, b], got \"" +
+                                                       r.get<std::string>("camera_radiance") + "\"");
+    s.camera_radiance.reset();
+  } else if (r.has("camera_radiance") && !r.value()["camera_radiance"].is_null()) {
+    s.camera_radiance = r.get_array_or<3>("camera_radiance", {0, 0, 0});
+  } else {
+    r.mark("camera_radiance");
+  }
   s.defocus = r.get_or<bool>("defocus", s.defocus);
   s.mask_rule = r.get_enum_or("mask_rule", s.mask_rule, {LensMaskRule::kPerceptible, LensMaskRule::kCoverage});
   s.mask_min_change_levels = r.get_number_or("mask_min_change_levels", s.mask_min_change_levels, 0, 255);
@@ -135,6 +145,9 @@ void validate_lens_droplet_spec(const LensDropletSpec& s, const std::string& whe
           "0..64");
   require(s.cap_segments >= 6 && s.cap_segments <= 1024, where, "cap_segments",
           std::to_string(s.cap_segments), "6..1024");
+  if (s.camera_radiance)
+    for (double v : *s.camera_radiance)
+      require(fin(v) && v >= 0 && v <= 1e6, where, "camera_radiance", num(v), "0 <= value <= 1e6 (linear radiance)");
   if (s.environment_radiance)
     for (double v : *s.environment_radiance)
       require(fin(v) && v >= 0 && v <= 1e6, where, "environment_radiance", num(v),
@@ -176,6 +189,10 @@ Json lens_droplet_spec_to_json(const LensDropletSpec& s) {
                                  (*s.environment_radiance)[2]};
   else
     j["environment_radiance"] = s.environment_sky ? "sky" : "mean";
+  if (s.camera_radiance)
+    j["camera_radiance"] = {(*s.camera_radiance)[0], (*s.camera_radiance)[1], (*s.camera_radiance)[2]};
+  else
+    j["camera_radiance"] = "environment";
   j["defocus"] = s.defocus;
   j["mask_rule"] = to_string(s.mask_rule);
   j["mask_min_change_levels"] = s.mask_min_change_levels;

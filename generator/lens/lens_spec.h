@@ -59,6 +59,10 @@ struct LensDropletSpec {
   int cap_segments = 48;                          // triangles geometry: segments around a cap
   std::optional<std::array<double, 3>> environment_radiance;  // unset: the view's mean radiance, or
   bool environment_sky = false;  // ... the dataset's sky radiance estimate ("sky"; physical style's default)
+  // Light the drops send back towards the camera (trace_path's camera_weight) meets the camera's own
+  // front: its radiance, linear RGB; unset ("environment"): the environment radiance as any other
+  // unfollowed light (the paper style's, and the window attach's, where the room lies behind).
+  std::optional<std::array<double, 3>> camera_radiance;
   bool defocus = true;                            // thin-lens blur of the glass when known
   LensMaskRule mask_rule = LensMaskRule::kPerceptible;
   double mask_min_change_levels = 4;              // perceptible rule: 8-bit sRGB levels (> this)

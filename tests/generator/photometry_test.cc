@@ -224,5 +224,34 @@ TEST(Photometry, LensDropEnvironmentDefaultsByStyle) {
   EXPECT_THROW(parse({{"effects", bad}}), InputError);
 }
 
+TEST(Photometry, LensDropCameraRadianceDefaultsByStyleAndAttach) {
+  auto parse = [](const Json& j) { return parse_weather_spec(JsonReader(j, "spec.json")); };
+  const Json lens = {{"lens_droplets", {{"count", 5}}}};
+  // Physical, on the lens: light sent back towards the camera meets its dark front (agrees with a
+  // Cycles camera body); paper: the environment, as its suite was generated.
+  const WeatherSpec physical = parse({{"effects", lens}});
+  ASSERT_TRUE(physical.lens_droplets->camera_radiance.has_value());
+  EXPECT_EQ(*physical.lens_droplets->camera_radiance, (std::array<double, 3>{0, 0, 0}));
+  EXPECT_EQ(physical.to_json()["effects"]["lens_droplets"]["camera_radiance"], Json::array({0.0, 0.0, 0.0}));
+  const WeatherSpec paper = parse({{"style", "paper"}, {"effects", lens}});
+  EXPECT_FALSE(paper.lens_droplets->camera_radiance.has_value());
+  EXPECT_EQ(paper.to_json()["effects"]["lens_droplets"]["camera_radiance"], "environment");
+  // A window: the room lies behind the camera, not its body.
+  const Json window = {{"lens_droplets", {{"count", 5}, {"attach", "window"}}}};
+  EXPECT_FALSE(parse({{"effects", window}}).lens_droplets->camera_radiance.has_value());
+  const Json env = {{"lens_droplets", {{"count", 5}, {"camera_radiance", "environment"}}}};
+  EXPECT_FALSE(parse({{"effects", env}}).lens_droplets->camera_radiance.has_value());
+  const Json grey = {{"lens_droplets", {{"count", 5}, {"camera_radiance", {0.1, 0.1, 0.1}}}}};
+  const WeatherSpec g = parse({{"style", "paper"}, {"effects", grey}});
+  EXPECT_EQ(*g.lens_droplets->camera_radiance, (std::array<double, 3>{0.1, 0.1, 0.1}));
+  // The resolved spec parses back to the same choice.
+  EXPECT_FALSE(parse(paper.to_json()).lens_droplets->camera_radiance.has_value());
+  EXPECT_TRUE(parse(physical.to_json()).lens_droplets->camera_radiance.has_value());
+  for (const Json& v : {Json("body"), Json::array({-1.0, 0.0, 0.0}), Json::array({0.0, 0.0})}) {
+    const Json bad = {{"lens_droplets", {{"count", 5}, {"camera_radiance", v}}}};
+    EXPECT_THROW(parse({{"effects", bad}}), InputError) << v.dump();
+  }
+}
+
 }  // namespace
 }  // namespace weathergs

@@ -91,6 +91,10 @@ TEST_F(LensPathTest, ApexRayIsUndeviated) {
       // Normal incidence twice: (1 - R0)^2 of the light goes on, the rest is reflected.
       const double r0 = fresnel_dielectric(1, 1, kWaterRefractiveIndex);
       EXPECT_NEAR(r.scene_weight, (1 - r0) * (1 - r0), 1e-12);
+      // The first surface's reflection goes straight back to the camera; the second's, inside the
+      // water, is not followed (environment).
+      EXPECT_NEAR(r.camera_weight, r0, 1e-12);
+      EXPECT_NEAR(r.environment_weight, (1 - r0) * r0, 1e-12);
     }
   }
   // An oblique ray whose in-water segment ends at the apex: there the cap is parallel to the glass,
@@ -133,7 +137,7 @@ TEST_F(LensPathTest, FlatDropMapsTheImageOntoItself) {
         if (!r.touched_water) continue;
         ++touched;
         EXPECT_LT((landing(r.exit_direction, kFocalPx) - landing(d, kFocalPx)).norm(), kMaxShiftPx);
-        EXPECT_NEAR(r.scene_weight + r.environment_weight, 1, 1e-12);
+        EXPECT_NEAR(r.scene_weight + r.environment_weight + r.camera_weight, 1, 1e-12);
       }
     }
     EXPECT_GT(touched, 1000) << "rays inside the 2 mm footprint";
@@ -200,8 +204,10 @@ TEST_F(LensPathTest, SnellAndEnergyHoldAtSampledHits) {
         EXPECT_LE(r.scene_weight, 1);
         EXPECT_GE(r.environment_weight, 0);
         EXPECT_LE(r.environment_weight, 1);
+        EXPECT_GE(r.camera_weight, 0);
+        EXPECT_LE(r.camera_weight, 1);
         if (r.touched_water) {
-          EXPECT_NEAR(r.scene_weight + r.environment_weight, 1, 1e-12);
+          EXPECT_NEAR(r.scene_weight + r.environment_weight + r.camera_weight, 1, 1e-12);
         } else {
           EXPECT_EQ(r.scene_weight, 1);
         }
@@ -257,7 +263,7 @@ TEST_F(LensPathTest, GrazingRimRaysStayFinite) {
           ASSERT_TRUE(r.exit_direction.allFinite()) << theta;
           ASSERT_TRUE(std::isfinite(r.scene_weight) && std::isfinite(r.environment_weight));
           if (r.touched_water) {
-            EXPECT_NEAR(r.scene_weight + r.environment_weight, 1, 1e-12);
+            EXPECT_NEAR(r.scene_weight + r.environment_weight + r.camera_weight, 1, 1e-12);
           }
           EXPECT_LE(int(events.size()), 4 * options.max_bounces + 64);
         }
@@ -285,6 +291,10 @@ TEST_F(LensPathTest, TotalInternalReflectionIsBounded) {
       saw_tir += tir > 0;
       if (tir > bounces) {
         EXPECT_EQ(r.scene_weight, 0);
+      }
+      if (r.touched_water && r.scene_weight == 0 && tir <= bounces) {
+        // Not cut, yet nothing reaches the scene: the path left backwards, towards the camera.
+        EXPECT_GT(r.camera_weight, 0.5);
       }
     }
     EXPECT_GT(saw_tir, 0);
