@@ -123,18 +123,24 @@ def setup_render(render, out_dir, depth_dir):
     return fo
 
 
-def add_markers(markers):
-    if not markers:
-        return 0
-    mat = bpy.data.materials.new("marker")
+def emission_material(name, rgb):
+    """An emitter of strength 1 and colour `rgb`: it shows exactly rgb, whatever lights it."""
+    mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
     em = nt.nodes.new("ShaderNodeEmission")
-    em.inputs["Color"].default_value = (1.0, 0.0, 1.0, 1.0)
+    em.inputs["Color"].default_value = (*rgb, 1.0)
     em.inputs["Strength"].default_value = 1.0
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(em.outputs[0], out.inputs["Surface"])
+    return mat
+
+
+def add_markers(markers):
+    if not markers:
+        return 0
+    mat = emission_material("marker", (1.0, 0.0, 1.0))
     for i, m in enumerate(markers):
         bm = bmesh.new()
         bmesh.ops.create_uvsphere(bm, u_segments=32, v_segments=16, radius=m["radius_m"])
@@ -267,6 +273,16 @@ def add_lens_drops(lens, camera):
         if flip:
             bmesh.ops.reverse_faces(bm, faces=flip)
 
+    def ring_edges(bm, ring):  # a drop's base polygon as edges of bm, its vertices shared
+        verts = {}
+
+        def vert(co):
+            key = (round(co.x, 12), round(co.y, 12))
+            if key not in verts:
+                verts[key] = bm.verts.new(co)
+            return verts[key]
+        return [bm.edges.new((vert(a), vert(b))) for a, b in ring]
+
     def new_object(name, bm, materials, parent_coll):
         to_blender(bm)
         bm.normal_update()
@@ -341,15 +357,7 @@ def add_lens_drops(lens, camera):
     for k in range(4):
         bm.faces.new((vn[k], vn[(k + 1) % 4], vf[(k + 1) % 4], vf[k]))
     outline = [bm.edges.get((vf[k], vf[(k + 1) % 4])) for k in range(4)]  # made with the side faces
-    holes = []
-    for ring in rings:
-        verts = {}
-        def vert(co):
-            key = (round(co.x, 12), round(co.y, 12))
-            if key not in verts:
-                verts[key] = bm.verts.new(co)
-            return verts[key]
-        holes += [bm.edges.new((vert(a), vert(b))) for a, b in ring]
+    holes = [e for ring in rings for e in ring_edges(bm, ring)]
     # The outer face: the square minus the drops' bases (scanfill treats nested loops as holes).
     bmesh.ops.triangle_fill(bm, use_beauty=True, use_dissolve=False, edges=outline + holes)
     middle = Vector((0.0, 0.0, 0.5 * (near + cz)))
@@ -359,17 +367,11 @@ def add_lens_drops(lens, camera):
     new_object("cover_glass", bm, [glass], plate_coll)
     for i, ring in enumerate(rings):  # glass/air where the drops' bases would be
         bm = bmesh.new()
-        verts = {}
-        def vert(co):
-            key = (round(co.x, 12), round(co.y, 12))
-            if key not in verts:
-                verts[key] = bm.verts.new(co)
-            return verts[key]
-        edges = [bm.edges.new((vert(a), vert(b))) for a, b in ring]
-        bmesh.ops.edgeloop_fill(bm, edges=edges)
+        bmesh.ops.edgeloop_fill(bm, edges=ring_edges(bm, ring))
         orient(bm, lambda f: Vector((0.0, 0.0, 1.0)))
         new_object(f"cover_glass_plug{i}", bm, [glass], plugs_coll)
     return coll, plugs_coll, plate_coll
+
 
 class CoverageMode:
     """Per-view switch for the particles' coverage render of the path-tracer validation: a view with
@@ -388,16 +390,7 @@ class CoverageMode:
         scene = bpy.context.scene
         layer = bpy.context.view_layer
         if on and self.white is None:
-            mat = bpy.data.materials.new("coverage_white")
-            mat.use_nodes = True
-            nt = mat.node_tree
-            nt.nodes.clear()
-            em = nt.nodes.new("ShaderNodeEmission")
-            em.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-            em.inputs["Strength"].default_value = 1.0
-            out = nt.nodes.new("ShaderNodeOutputMaterial")
-            nt.links.new(em.outputs[0], out.inputs["Surface"])
-            self.white = mat
+            self.white = emission_material("coverage_white", (1.0, 1.0, 1.0))
         scene.render.film_transparent = on
         layer.material_override = self.white if on else None
         layer.layer_collection.children[self.name].holdout = on
