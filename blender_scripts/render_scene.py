@@ -89,7 +89,8 @@ def run(job):
     os.makedirs(os.path.join(out_dir, depth_dir), exist_ok=True)
     t_setup = time.time() - t0
 
-    coverage = CoverageMode(collection.name)
+    # Only validation jobs ask for coverage views: dataset renders never touch those settings.
+    coverage = CoverageMode(collection.name) if any(v.get("coverage") for v in cam_spec["views"]) else None
     views_out = []
     times = []
     W, H = render["width"], render["height"]
@@ -102,7 +103,8 @@ def run(job):
         scene.frame_set(frame)
         if particle_coll is not None:
             particle_coll.hide_render = not view.get("particles", True)
-        coverage.set(bool(view.get("coverage", False)))
+        if coverage is not None:
+            coverage.set(bool(view.get("coverage", False)))
         if lens_coll is not None:
             lens_coll.hide_render = not view.get("lens", True)
         if glass_coll is not None:  # the cover glass, its holes plugged where no drop is shown

@@ -325,7 +325,8 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   const double cycles_weather_s = log["view_seconds"][1].get<double>();
 
   auto cycles = [&](const Camera& c) { return read_image(raw + "/clean/" + c.name + ".exr"); };
-  Image lc = difference(cycles(weather), cycles(plain));
+  const Image plain_render = cycles(plain);
+  Image lc = difference(cycles(weather), plain_render);
   Image lc2 = difference(cycles(weather2), cycles(plain2));
   // The dataset's clean view is what the camera sees without drops, through its cover glass (the
   // generator's convention): the glass's transmission T is in it. Ours was rendered without a glass,
@@ -333,9 +334,9 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
   // renders with and without the glass (the same sampling seed).
   double glass_transmission = 1;
   if (glass) {
-    const Image with = cycles(plain), without = cycles(no_glass);
+    const Image without = cycles(no_glass);
     double a = 0, b = 0;
-    for (size_t i = 0; i < with.data.size(); ++i) a += with.data[i], b += without.data[i];
+    for (size_t i = 0; i < plain_render.data.size(); ++i) a += plain_render.data[i], b += without.data[i];
     if (!(a > 0 && b > 0)) throw InputError(raw, "the plain Cycles renders are black: cannot measure the glass's transmission");
     glass_transmission = a / b;
     for (float& v : lc.data) v = float(v / glass_transmission);
