@@ -33,6 +33,43 @@ WGS_ALWAYS_INLINE auto sum3(A a0, B b0, C a1, D b1, E a2, F b2) {
   return a0 * b0 + (a1 * b1 + a2 * b2);
 }
 
+template <typename V>
+WGS_ALWAYS_INLINE V load_v(const float* p) {
+  V v;
+  std::memcpy(&v, p, sizeof(V));
+  return v;
+}
+
+// In-place transpose of a W x W block held as W vectors (rows[l][c] becomes rows[c][l]).
+template <int W>
+WGS_ALWAYS_INLINE void transpose(typename Lanes<W>::f* r) {
+  using vf = typename Lanes<W>::f;
+  if constexpr (W == 4) {
+    const vf t0 = __builtin_shufflevector(r[0], r[1], 0, 4, 1, 5), t1 = __builtin_shufflevector(r[0], r[1], 2, 6, 3, 7);
+    const vf t2 = __builtin_shufflevector(r[2], r[3], 0, 4, 1, 5), t3 = __builtin_shufflevector(r[2], r[3], 2, 6, 3, 7);
+    r[0] = __builtin_shufflevector(t0, t2, 0, 1, 4, 5);
+    r[1] = __builtin_shufflevector(t0, t2, 2, 3, 6, 7);
+    r[2] = __builtin_shufflevector(t1, t3, 0, 1, 4, 5);
+    r[3] = __builtin_shufflevector(t1, t3, 2, 3, 6, 7);
+  } else {
+    static_assert(W == 8);
+    vf t[8], u[8];
+    for (int k = 0; k < 8; k += 2) {  // pairs of rows interleaved within each 128-bit half
+      t[k] = __builtin_shufflevector(r[k], r[k + 1], 0, 8, 1, 9, 4, 12, 5, 13);
+      t[k + 1] = __builtin_shufflevector(r[k], r[k + 1], 2, 10, 3, 11, 6, 14, 7, 15);
+    }
+    for (int k = 0; k < 8; k += 4)  // quads of rows: columns c and c + 4 of four rows
+      for (int h = 0; h < 2; ++h) {
+        u[k + 2 * h] = __builtin_shufflevector(t[k + h], t[k + h + 2], 0, 1, 8, 9, 4, 5, 12, 13);
+        u[k + 2 * h + 1] = __builtin_shufflevector(t[k + h], t[k + h + 2], 2, 3, 10, 11, 6, 7, 14, 15);
+      }
+    for (int c = 0; c < 4; ++c) {  // the two 128-bit halves: columns c and c + 4 of all eight rows
+      r[c] = __builtin_shufflevector(u[c], u[c + 4], 0, 1, 2, 3, 8, 9, 10, 11);
+      r[c + 4] = __builtin_shufflevector(u[c], u[c + 4], 4, 5, 6, 7, 12, 13, 14, 15);
+    }
+  }
+}
+
 // tile_floor_index, lane by lane.
 template <int W>
 WGS_ALWAYS_INLINE typename Lanes<W>::i tile_floor_v(typename Lanes<W>::f v, int grid) {
@@ -182,13 +219,18 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
     }
   }
   const int n_coeffs = (degree + 1) * (degree + 1);
+  // The lanes' SH coefficients, coefficient-major: W rows of W consecutive floats (one row per
+  // Gaussian) transposed in registers, instead of one scalar load per lane and coefficient.
+  vf coef[kShFloats];
+  for (int f0 = 0; f0 < n_coeffs * 3; f0 += W) {
+    vf rows[W];
+    for (int l = 0; l < W; ++l) rows[l] = load_v<vf>(&g.sh[lane[l] * kShFloats + f0]);
+    transpose<W>(rows);
+    for (int c = 0; c < W; ++c) coef[f0 + c] = rows[c];
+  }
   vf col[3] = {vf{} + 0.5f, vf{} + 0.5f, vf{} + 0.5f};
   for (int k = 0; k < n_coeffs; ++k)
-    for (int ch = 0; ch < 3; ++ch) {
-      vf coef;
-      for (int l = 0; l < W; ++l) coef[l] = g.sh[lane[l] * kShFloats + k * 3 + ch];
-      col[ch] += b[k] * coef;
-    }
+    for (int ch = 0; ch < 3; ++ch) col[ch] += b[k] * coef[k * 3 + ch];
 
   // finish_gaussian, lane by lane the same operations, up to the tile mask.
   vf rgb[3];

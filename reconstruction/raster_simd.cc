@@ -51,6 +51,23 @@ WGS_ALWAYS_INLINE typename Lanes<W>::f blend_exp_v(typename Lanes<W>::f x) {
   return p * scale;
 }
 
+// Whether any lane of a comparison mask (0 or -1 per lane) is set.
+template <int W>
+WGS_ALWAYS_INLINE bool any_lane(typename Lanes<W>::i m) {
+  if constexpr (W == 8) {
+    typename Lanes<4>::i lo, hi;
+    std::memcpy(&lo, &m, sizeof lo);
+    std::memcpy(&hi, reinterpret_cast<const char*>(&m) + sizeof lo, sizeof hi);
+    return any_lane<4>(lo | hi);
+  } else {
+    static_assert(W == 4);
+    uint64_t a, b;
+    std::memcpy(&a, &m, 8);
+    std::memcpy(&b, reinterpret_cast<const char*>(&m) + 8, 8);
+    return (a | b) != 0;
+  }
+}
+
 template <typename V>
 WGS_ALWAYS_INLINE float hsum4(V v) {
   return ((v[0] + v[1]) + v[2]) + v[3];
@@ -104,6 +121,10 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     if (px0 > px1) continue;
     const vf mx = splat<vf>(sp[0]), ca = splat<vf>(sp[2]), cb = splat<vf>(sp[3]), cc = splat<vf>(sp[4]);
     const vf o = splat<vf>(sp[5]), r = splat<vf>(sp[6]), g = splat<vf>(sp[7]), b = splat<vf>(sp[8]);
+    // Below this power every lane's alpha is < 1/255 (sp[11] carries the margin against the float
+    // rounding of the power and blend_exp, see tile_touched): a block with no lane at or above it and
+    // not done changes nothing, so it is skipped before the exp, the loads and the stores.
+    const vf power_min = splat<vf>(-0.5f * sp[11]);
     const vi contributor = vi{} + int32_t(k - begin + 1);
     const int bx0 = ((px0 - x0) / W) * W, bx1 = px1 - x0;
     const uint32_t span = ((uint32_t(2) << (px1 - x0)) - 1) & ~((uint32_t(1) << (px0 - x0)) - 1);
@@ -116,10 +137,12 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
         const int p = row + bx;
         const vf dx = mx - (lane_center + float(bx));
         const vf power = -0.5f * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
+        const vi live = load<vi>(&done[p]) == 0;
+        if (!any_lane<W>((power >= power_min) & live)) continue;
         const vf alpha = vmin(splat<vf>(float(kAlphaMax)), o * blend_exp_v<W>(vmin(power, splat<vf>(0.f))));
         const vf tp = load<vf>(&trans[p]);
         const vf test_t = tp * (1.f - alpha);
-        const vi ok = (power <= 0.f) & (alpha >= float(kAlphaMin)) & (load<vi>(&done[p]) == 0);
+        const vi ok = (power <= 0.f) & (alpha >= float(kAlphaMin)) & live;
         const vi stop = ok & (test_t < float(kTransmittanceMin));
         const vi add = ok & ~stop;
         const vf w = add ? alpha * tp : splat<vf>(0.f);
@@ -203,7 +226,7 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
   const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
   // Each entry's 9 sums go to its slot in the per-Gaussian order (entry_slot), which the reduction
   // then reads sequentially; entries that are not replayed get zeros.
-  auto slot = [&](int64_t k) { return &s->entry_grad[s->entry_slot[begin + k] * kEntryGrads]; };
+  auto slot = [&](int64_t k) { return &s->entry_grad[int64_t(s->entry_slot[begin + k]) * kEntryGrads]; };
   for (int64_t k = kmax; k < end - begin; ++k) std::fill_n(slot(k), kEntryGrads, 0.f);
   const vf lane_center = lane_centers<W>(x0);
   const vf zero = splat<vf>(0.f), alpha_max = splat<vf>(float(kAlphaMax));

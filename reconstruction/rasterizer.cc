@@ -130,10 +130,12 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
     }
     s->tile_offset[t + 1] = run;
   }
-  s->tile_gaussian.resize(entries);
+  // Slots and ranks are int32 (half the scatter's writes of int64): checked, not assumed.
+  WGS_CHECK_LT(entries, int64_t(std::numeric_limits<int32_t>::max()));
   s->tile_rank.resize(entries);
   s->entry_slot.resize(entries);
   s->splat_sorted.resize(size_t(visible) * kSplatFloats);
+  s->sorted_gaussian.resize(visible);
   // The same pass gives each entry its slot in the per-Gaussian order (the Gaussian's tiles in
   // row-major order: entry_slot), and copies the records into depth order.
   parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
@@ -148,13 +150,13 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
         __builtin_prefetch(&s->entry_offset[ahead]);
       }
       const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
-      int64_t j = s->entry_offset[gi];
+      int32_t j = int32_t(s->entry_offset[gi]);
       for_each_tile(gi, [&](int t) {
         const int64_t k = cursor[t]++;
-        s->tile_gaussian[k] = gi;
         s->tile_rank[k] = int32_t(rank);
         s->entry_slot[k] = j++;
       });
+      s->sorted_gaussian[rank] = gi;
       const T* from = &s->splat[int64_t(gi) * kSplatFloats];
       T* to = &s->splat_sorted[rank * kSplatFloats];
       for (int f = 0; f < kSplatFloats; ++f) to[f] = from[f];
@@ -317,7 +319,7 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
       }
     const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
     // Sums go to each entry's slot in the per-Gaussian order; entries not replayed get zeros.
-    auto slot = [&](int64_t k) { return &s->entry_grad[s->entry_slot[begin + k] * kEntryGrads]; };
+    auto slot = [&](int64_t k) { return &s->entry_grad[int64_t(s->entry_slot[begin + k]) * kEntryGrads]; };
     for (int64_t k = kmax; k < end - begin; ++k) std::fill_n(slot(k), kEntryGrads, T(0));
     for (int32_t k = kmax - 1; k >= 0; --k) {
       const T* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];

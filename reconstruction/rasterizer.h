@@ -55,10 +55,11 @@ struct RasterState {
   std::vector<int64_t> entry_offset;  // N + 1: first slot of each Gaussian in the per-Gaussian order
   // Per tile.
   std::vector<int64_t> tile_offset;   // tiles + 1
-  std::vector<int32_t> tile_gaussian; // entries: Gaussian ids, each tile's range sorted by depth
-  std::vector<int32_t> tile_rank;     // entries: depth rank of the Gaussian (index into splat_sorted)
+  std::vector<int32_t> tile_rank;     // entries: depth rank of the Gaussian (index into splat_sorted
+                                      // and sorted_gaussian), each tile's range sorted by depth
   std::vector<T> splat_sorted;        // visible Gaussians' records in depth order
-  std::vector<int64_t> entry_slot;    // entries: the entry's slot in the per-Gaussian order (each
+  std::vector<int32_t> sorted_gaussian;  // visible Gaussians' ids in depth order
+  std::vector<int32_t> entry_slot;    // entries: the entry's slot in the per-Gaussian order (each
                                       // Gaussian's entries contiguous, its tiles in row-major order)
   // Per pixel.
   std::vector<T> image;          // H x W x 3

@@ -48,7 +48,8 @@ TEST(RasterizerTest, TileKernelEqualsPerPixelReferenceBlend) {
     const int64_t b = st.tile_offset[t], e = st.tile_offset[t + 1];
     max_list = std::max(max_list, e - b);
     for (int64_t k = b + 1; k < e; ++k)
-      ASSERT_LE(float(st.depth[st.tile_gaussian[k - 1]]), float(st.depth[st.tile_gaussian[k]])) << "tile " << t;
+      ASSERT_LE(float(st.depth[st.sorted_gaussian[st.tile_rank[k - 1]]]),
+                float(st.depth[st.sorted_gaussian[st.tile_rank[k]]])) << "tile " << t;
   }
   EXPECT_GT(max_list, 50);
   int stopped_pixels = 0;
@@ -58,7 +59,7 @@ TEST(RasterizerTest, TileKernelEqualsPerPixelReferenceBlend) {
       double T = 1, rgb[3] = {0, 0, 0};
       int last = 0;
       for (int64_t k = st.tile_offset[t]; k < st.tile_offset[t + 1]; ++k) {
-        const int gi = st.tile_gaussian[k];
+        const int gi = st.sorted_gaussian[st.tile_rank[k]];
         const double alpha = reference_alpha(st, gi, x, y);
         if (alpha == 0) continue;
         const double test_t = T * (1 - alpha);
