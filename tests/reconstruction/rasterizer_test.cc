@@ -125,6 +125,30 @@ TEST(RasterizerTest, OpacityAwareTilesKeepEveryContributingPixel) {
 // The float path (fast exp) against the double path on the same scene.
 // The float blend exp (raster_internal.h) against std::exp in double: densely over the blend's range
 // [-5.6, 0] (a weight >= 1/255 needs power >= -ln 255), at tiny arguments, and down to its -87 floor.
+// The float tile kernel skips an 8-pixel block when every lane's power lies below -sp[11] / 2 (the
+// record's alpha bound with its margin). That is exact only if no power below it can give a kernel
+// alpha >= 1/255: swept here over opacities from just above 1/255 to 1 and powers on a fine grid
+// around each one's threshold ln(1 / (255 o)), with the kernel's own float arithmetic.
+TEST(RasterizerTest, BlendSkipBoundIsConservative) {
+  int near_threshold = 0;
+  for (int i = 0; i <= 2000; ++i) {
+    const float o = float(kAlphaMin) * (1.0f + 1e-6f) + (1.0f - float(kAlphaMin)) * float(i) / 2000.0f;
+    const float q_max = internal::alpha_q_max(o);
+    ASSERT_GE(q_max, 0.0f) << o;
+    const float bound = -0.5f * (q_max * 1.0001f + 1e-3f);  // as sp[11] in finish_gaussian
+    const float threshold = -0.5f * q_max;
+    for (int k = -400; k <= 400; ++k) {
+      const float power = threshold + float(k) * 2e-6f;
+      const float alpha = std::min(float(kAlphaMax), o * internal::blend_exp(std::min(power, 0.0f)));
+      if (alpha >= float(kAlphaMin)) {
+        ASSERT_GE(power, bound) << "opacity " << o << ": alpha " << alpha << " at a power the kernel skips";
+        near_threshold += power < threshold + 1e-4f;
+      }
+    }
+  }
+  EXPECT_GT(near_threshold, 1000);  // the sweep does reach alphas right at the threshold
+}
+
 TEST(RasterizerTest, BlendExpIsAccurate) {
   constexpr double kBlendRangeTol = 6e-7;  // 4.4e-7 in a float emulation: the fit (9e-8) + x log2 e rounding
   constexpr double kFullRangeTol = 5e-6;   // 3.9e-6 near -87 (the rounding of x log2 e grows with |x|)
