@@ -10,7 +10,8 @@ namespace {
 
 struct TrainArgs {
   recon::TrainRunOptions run;
-  std::string images = "images", masks = "none", random_init = "photo", mask_normalization = "valid";
+  std::string images = "images", masks = "none", random_init = "photo", mask_normalization = "valid",
+              large_prune = "distance";
   std::vector<double> background;
   CLI::App* app = nullptr;
 };
@@ -23,6 +24,7 @@ int run_train(TrainArgs& args) {
                                                       : recon::TrainOptions::RandomInit::kPhotoConsistent;
   o.train.mask_normalization = args.mask_normalization == "reference" ? recon::MaskNormalization::kReference
                                                                       : recon::MaskNormalization::kValid;
+  o.train.large_prune = recon::parse_large_prune(args.large_prune, "--large-prune");
   if (o.resume) {
     // Start from what the run was trained with; explicitly given flags must agree (checked below
     // through the checkpoint) or extend nothing silently.
@@ -45,6 +47,7 @@ int run_train(TrainArgs& args) {
       o.train.distractor_opacity_weight = stored.train.distractor_opacity_weight;
     if (!given("--mask-normalization")) o.train.mask_normalization = stored.train.mask_normalization;
     if (!given("--in-the-wild")) o.train.in_the_wild = stored.train.in_the_wild;
+    if (!given("--large-prune")) o.train.large_prune = stored.train.large_prune;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
@@ -118,6 +121,11 @@ Command make_train(CLI::App& root) {
                   "Masked loss: valid (means over the valid pixels, masked ones count for nothing) or reference "
                   "(the WeatherGS release: masked target pixels replaced by the render, means over all pixels)")
       ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
+  sub->add_option("--large-prune", args->large_prune,
+                  "Large-Gaussian prune (after the first opacity reset): distance (a Gaussian may be up to max_world_size x the "
+                  "larger of the cameras' extent and its distance from the rig) or camera_extent (the reference: max_world_size x "
+                  "the cameras' extent; collapses forward-facing scenes at 30,000 iterations); docs/reconstruction.md")
+      ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));
   sub->add_option("--random-init-count", o.train.random_init_count,
                   "Gaussians for random initialization when the dataset has no COLMAP points")
       ->capture_default_str();

@@ -18,6 +18,7 @@ struct ReconstructArgs {
   std::string led_weights, aef_weights;
   double led_threshold = 0;
   std::string mask_normalization = "valid";
+  std::string large_prune = "distance";
   ScoringFlags scoring;
 };
 
@@ -28,6 +29,7 @@ int run(ReconstructArgs& a) {
   o.scoring = a.scoring.options();
   o.mask_normalization = a.mask_normalization == "reference" ? recon::MaskNormalization::kReference
                                                              : recon::MaskNormalization::kValid;
+  o.large_prune = recon::parse_large_prune(a.large_prune, "--large-prune");
   if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
   if (study::recipe(o.method).particle_filter && study::recipe(o.method).aef == restoration::FilterMethod::kLearned)
     o.aef_weights = find_aef_weights(a.aef_weights);
@@ -86,6 +88,11 @@ Command make(CLI::App& root) {
                   "pixels) or reference (the WeatherGS release: masked target pixels replaced by the render, means "
                   "over all pixels); docs/reconstruction.md")
       ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
+  sub->add_option("--large-prune", a->large_prune,
+                  "Large-Gaussian prune (after the first opacity reset): distance (a Gaussian may be up to max_world_size x the "
+                  "larger of the cameras' extent and its distance from the rig) or camera_extent (the reference: max_world_size x "
+                  "the cameras' extent; collapses forward-facing scenes at 30,000 iterations); docs/reconstruction.md")
+      ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));
   sub->add_option("--distractor-opacity-weight", a->options.distractor_opacity_weight,
                   "desplat: opacity penalty of the per-view distractor Gaussians (docs/reconstruction.md)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);

@@ -114,6 +114,7 @@ Json TrainOptions::to_json() const {
               {"min_opacity", min_opacity},
               {"max_screen_size_px", max_screen_size_px},
               {"max_world_size", max_world_size},
+              {"large_prune", to_string(large_prune)},
               {"max_gaussians", max_gaussians},
               {"background", {background[0], background[1], background[2]}},
               {"random_init", to_string(random_init)},
@@ -135,6 +136,16 @@ const char* to_string(TrainOptions::RandomInit r) {
 
 const char* to_string(TrainOptions::Robust r) {
   return r == TrainOptions::Robust::kRobustFilter ? "robust_filter" : "none";
+}
+
+const char* to_string(TrainOptions::LargePrune p) {
+  return p == TrainOptions::LargePrune::kCameraExtent ? "camera_extent" : "distance";
+}
+
+TrainOptions::LargePrune parse_large_prune(const std::string& s, const std::string& where) {
+  for (TrainOptions::LargePrune p : {TrainOptions::LargePrune::kCameraExtent, TrainOptions::LargePrune::kDistance})
+    if (s == to_string(p)) return p;
+  throw InputError(where, "expected distance or camera_extent, got '" + s + "'");
 }
 
 const char* to_string(TrainOptions::Schedule s) {
@@ -204,6 +215,7 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.min_opacity = r.get_or("min_opacity", o.min_opacity);
   o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
   o.max_world_size = r.get_or("max_world_size", o.max_world_size);
+  o.large_prune = r.get_enum_or("large_prune", o.large_prune, {LargePrune::kCameraExtent, LargePrune::kDistance});
   o.max_gaussians = r.get_or<int64_t>("max_gaussians", o.max_gaussians);
   if (r.has("background")) {
     JsonReader b = r.child("background");
@@ -231,11 +243,15 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
 // ---------------------------------------------------------------------------------------------
 // Scene helpers
 
-double scene_extent(const std::vector<Camera>& cameras) {
+Eigen::Vector3d rig_center(const std::vector<Camera>& cameras) {
   WGS_CHECK(!cameras.empty());
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (const Camera& c : cameras) mean += c.center_world();
-  mean /= double(cameras.size());
+  return mean / double(cameras.size());
+}
+
+double scene_extent(const std::vector<Camera>& cameras) {
+  const Eigen::Vector3d mean = rig_center(cameras);
   double max_dist = 0;
   for (const Camera& c : cameras) max_dist = std::max(max_dist, (c.center_world() - mean).norm());
   // One camera (or coincident ones) has no spread: fall back to 1 m so learning rates stay sane.
@@ -256,10 +272,11 @@ Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const
     WGS_CHECK_EQ(v.rgb.size(), size_t(v.camera.width) * v.camera.height * 3);
     if (!v.invalid.empty()) WGS_CHECK_EQ(v.invalid.size(), size_t(v.camera.width) * v.camera.height);
   }
+  std::vector<Camera> cameras;
+  for (const TrainView& v : views_) cameras.push_back(v.camera);
+  rig_center_ = rig_center(cameras);
   owner_.assign(g_.size(), kSceneOwner);
   if (options_.distractors_per_view > 0) {
-    std::vector<Camera> cameras;
-    for (const TrainView& v : views_) cameras.push_back(v.camera);
     add_distractors(cameras, options_.distractors_per_view, options_.seed, DistractorPlacement{}, &g_, &owner_);
     num_distractors_ = int64_t(cameras.size()) * options_.distractors_per_view;
   }
@@ -575,13 +592,19 @@ void Trainer::densify_and_prune(bool prune_large) {
     if (split[i]) keep[i] = 0;
   const float min_logit = float(inverse_sigmoid(std::max(options_.min_opacity, 1e-30)));
   const float max_world = float(options_.max_world_size * extent_);
+  const bool by_distance = options_.large_prune == TrainOptions::LargePrune::kDistance;
   for (size_t i = 0; i < total; ++i) {
     if (out.opacity_logit[i] < min_logit) keep[i] = 0;
     // Screen-size pruning (max_radii2D > max_screen_size_px) is not applied: the reference resets
     // max_radii2D to zero while densifying, just before this test, so it never fires there either.
     if (prune_large) {
       const float max_scale = std::exp(std::max({out.log_scale[i * 3], out.log_scale[i * 3 + 1], out.log_scale[i * 3 + 2]}));
-      if (max_scale > max_world) keep[i] = 0;
+      float limit = max_world;
+      if (by_distance) {  // the larger of the extent and the distance from the rig (TrainOptions::LargePrune)
+        const Eigen::Vector3d p(out.position[i * 3], out.position[i * 3 + 1], out.position[i * 3 + 2]);
+        limit = std::max(limit, float(options_.max_world_size * (p - rig_center_).norm()));
+      }
+      if (max_scale > limit) keep[i] = 0;
     }
   }
   out.keep(keep);

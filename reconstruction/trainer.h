@@ -45,6 +45,14 @@ struct TrainOptions {
   double min_opacity = 0.005;         // prune below
   int max_screen_size_px = 20;        // see docs/reconstruction.md: inert as in the reference
   double max_world_size = 0.1;        // prune scale > this fraction of the extent (after first reset)
+  // The length max_world_size is a fraction of. kCameraExtent: the cameras' extent (the reference's
+  // getNerfppNorm radius) for every Gaussian. kDistance (default): per Gaussian, the larger of that
+  // and its distance from the cameras' mean centre, so that the prune bounds a Gaussian's angular
+  // size as seen from the rig. Inside the camera ring of a 360-degree capture both are the same; on
+  // a forward-facing rig (extent ~1.5 m, scene 10-40 m deep) the reference's threshold removed the
+  // sky and water after the first reset (docs/reconstruction.md, "Large-Gaussian prune").
+  enum class LargePrune { kCameraExtent, kDistance };
+  LargePrune large_prune = LargePrune::kDistance;
   // Memory guard (docs/reliability.md, "Resources"): densification never grows the model beyond this
   // many Gaussians; when the candidates would, only those with the largest mean view-space gradient
   // (ties: lower index) are cloned or split. The trainer's peak memory is ~2.6 KiB per Gaussian at
@@ -103,10 +111,15 @@ struct TrainOptions {
 const char* to_string(TrainOptions::Schedule s);
 const char* to_string(TrainOptions::RandomInit r);
 const char* to_string(TrainOptions::Robust r);
+const char* to_string(TrainOptions::LargePrune p);
+// "distance" | "camera_extent"; anything else throws InputError naming `where`.
+TrainOptions::LargePrune parse_large_prune(const std::string& s, const std::string& where);
 
 using weathergs::TrainView;  // core/train_views.h
 
-// Radius of the camera centres around their mean, times 1.1 (getNerfppNorm): the "cameras extent".
+// Mean of the camera centres, and their radius around it times 1.1 (getNerfppNorm): the "cameras
+// extent".
+Eigen::Vector3d rig_center(const std::vector<Camera>& cameras);
 double scene_extent(const std::vector<Camera>& cameras);
 
 // Thrown when a loss or gradient stops being finite; names the parameter, the Gaussian and the step.
@@ -168,6 +181,7 @@ class Trainer {
   std::vector<TrainView> views_;
   TrainOptions requested_, options_;
   double extent_;
+  Eigen::Vector3d rig_center_;  // mean of the training cameras' centres (the extent's centre)
   GaussianSet<float> g_, grad_, adam_m_, adam_v_;
   std::array<int64_t, 6> adam_steps_{};  // per ParamGroup
   std::vector<float> grad_accum_, max_radii_;

@@ -44,6 +44,8 @@ struct ReconstructOptions {
   int random_init_count = 50000;  // Gaussians of the random initialization (when no SfM points)
   // The masked loss's normalisation (reconstruction/loss.h); matters for methods with loss masks.
   recon::MaskNormalization mask_normalization = recon::MaskNormalization::kValid;
+  // What the large-Gaussian prune's threshold is a fraction of (recon::TrainOptions::LargePrune).
+  recon::TrainOptions::LargePrune large_prune = recon::TrainOptions{}.large_prune;
   // desplat: TrainOptions::distractor_opacity_weight (the opacity penalty of the per-view distractors).
   double distractor_opacity_weight = recon::TrainOptions{}.distractor_opacity_weight;
   int checkpoint_every = 1000;

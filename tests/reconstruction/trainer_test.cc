@@ -172,6 +172,51 @@ TEST(TrainerTest, MaxGaussiansCapsDensificationDeterministically) {
   EXPECT_THROW(bad.validate("x"), InputError);
 }
 
+// The large-Gaussian prune after the first reset: with kCameraExtent (the reference) a Gaussian
+// larger than max_world_size x the cameras' extent goes wherever it is; with kDistance (default) the
+// limit grows with its distance from the rig, so a large Gaussian far away (the sky, a distant
+// facade of a forward-facing capture) stays while one as large inside the rig still goes.
+TEST(TrainerTest, LargePruneByDistanceKeepsFarLargeGaussians) {
+  Scene s = make_scene(40, 64, 48, 4);
+  const std::vector<Camera> cams = cameras_of(s.views);
+  const double extent = scene_extent(cams);  // ring of radius 4 at height 1.2: 4.4
+  const Eigen::Vector3d center = rig_center(cams);
+  EXPECT_NEAR(extent, 4.4, 1e-9);
+  EXPECT_NEAR(center.z(), 1.2, 1e-9);
+  std::vector<Eigen::Vector3d> pts, cols;
+  for (int i = 0; i < 40; ++i)
+    pts.emplace_back(s.truth.position[i * 3], s.truth.position[i * 3 + 1], s.truth.position[i * 3 + 2]);
+  pts.push_back(center);                                   // near: 0.6 > 0.1 x 4.4
+  pts.push_back(center + Eigen::Vector3d(0, 0, 30));       // far: 1.0 > 0.44 but < 0.1 x 30
+  cols.assign(pts.size(), Eigen::Vector3d(0.5, 0.5, 0.5));
+  GaussianSet<float> init = init_from_points(pts, cols);
+  for (size_t i = 0; i < init.size(); ++i) {
+    const double scale = i == 40 ? 0.6 : i == 41 ? 1.0 : 0.05;
+    for (int k = 0; k < 3; ++k) init.log_scale[i * 3 + k] = float(std::log(scale));
+  }
+  auto survivors = [&](TrainOptions::LargePrune mode) {
+    TrainOptions o;
+    o.iterations = 2;
+    o.schedule = TrainOptions::Schedule::kReference;
+    o.densify_from = 1;  // densify (and prune) at iteration 2, after the "reset" at iteration 1
+    o.densification_interval = 2;
+    o.opacity_reset_interval = 1;
+    o.densify_grad_threshold = 1e9;  // no clone or split: only the prune changes the set
+    o.large_prune = mode;
+    Trainer t(s.views, init, o, extent);
+    t.step();
+    t.step();
+    return t.gaussians();
+  };
+  const GaussianSet<float> by_distance = survivors(TrainOptions::LargePrune::kDistance);
+  const GaussianSet<float> by_extent = survivors(TrainOptions::LargePrune::kCameraExtent);
+  ASSERT_EQ(by_extent.size(), 40u);    // both large ones pruned, as the reference does
+  ASSERT_EQ(by_distance.size(), 41u);  // the far one kept
+  EXPECT_NEAR(by_distance.position[40 * 3 + 2], center.z() + 30, 0.1);
+  EXPECT_EQ(parse_large_prune("camera_extent", "x"), TrainOptions::LargePrune::kCameraExtent);
+  EXPECT_THROW(parse_large_prune("sky", "--large-prune"), InputError);
+}
+
 TEST(TrainerTest, ResumeFromCheckpointEqualsUninterruptedRun) {
   Scene s = make_scene(120, 48, 36, 4);
   weathergs::testing::TempDir dir;
