@@ -122,9 +122,6 @@ TEST(RasterizerTest, OpacityAwareTilesKeepEveryContributingPixel) {
     }
 }
 
-// The float path (fast exp) against the double path on the same scene.
-// The float blend exp (raster_internal.h) against std::exp in double: densely over the blend's range
-// [-5.6, 0] (a weight >= 1/255 needs power >= -ln 255), at tiny arguments, and down to its -87 floor.
 // The float tile kernel skips an 8-pixel block when every lane's power lies below -sp[11] / 2 (the
 // record's alpha bound with its margin). That is exact only if no power below it can give a kernel
 // alpha >= 1/255: swept here over opacities from just above 1/255 to 1 and powers on a fine grid
@@ -149,6 +146,9 @@ TEST(RasterizerTest, BlendSkipBoundIsConservative) {
   EXPECT_GT(near_threshold, 1000);  // the sweep does reach alphas right at the threshold
 }
 
+// The float path (fast exp) against the double path on the same scene.
+// The float blend exp (raster_internal.h) against std::exp in double: densely over the blend's range
+// [-5.6, 0] (a weight >= 1/255 needs power >= -ln 255), at tiny arguments, and down to its -87 floor.
 TEST(RasterizerTest, BlendExpIsAccurate) {
   constexpr double kBlendRangeTol = 6e-7;  // 4.4e-7 in a float emulation: the fit (9e-8) + x log2 e rounding
   constexpr double kFullRangeTol = 5e-6;   // 3.9e-6 near -87 (the rounding of x log2 e grows with |x|)
