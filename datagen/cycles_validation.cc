@@ -283,7 +283,10 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
     job["camera"]["views"][i]["seed"] = i < 2 ? 0 : 1;
   }
   if (!lens) job["camera"]["views"][4]["coverage"] = true;
-  if (glass) job["camera"]["views"][4]["lens"] = false, job["camera"]["views"][4]["glass"] = false;
+  if (glass) {  // views[4] is no_glass: lens jobs have no coverage view
+    job["camera"]["views"][4]["lens"] = false;
+    job["camera"]["views"][4]["glass"] = false;
+  }
   if (lens) {
     job["lens_drops"] = lens_job;
     // The drops sit centimetres from the pinhole: inside the scene renders' near clip.

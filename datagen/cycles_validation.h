@@ -43,7 +43,7 @@ struct CyclesValidationOptions {
   // Lens drops: the cover glass they sit on, modelled in the reference as a slab on the camera side
   // of the drops (the generator's glass is a plane: a parallel plate turns no ray, it only shifts
   // rays sideways and reflects a few percent). 1 mm of crown glass (n 1.52, BK7's at 587 nm) is our
-  // choice of a typical cover; 0 leaves the plate out (the reference before 2026-11-26).
+  // choice of a typical cover; 0 leaves the plate out (the reference before the second pass of 2026-11-25).
   double glass_thickness_m = 1e-3;
   double glass_refractive_index = 1.52;
   // Lens drops: a dark camera front 1 mm behind the aperture, so light the drops or the glass send back
