@@ -20,6 +20,11 @@ const char* to_string(StreakMode mode) { return mode == StreakMode::kAnalytic ? 
 
 namespace {
 constexpr int kBandRows = 8;  // rows per band of the parallel rasterizer
+// Subdivision of a streak's straight pieces for perspective (add_splat): the largest error, in
+// pixels, of constant image speed at a piece's middle time (a tenth of a pixel, 20x below the 2 px
+// streak-extent aim of the Cycles validation; benchmarks/README.md).
+constexpr double kPerspectiveTolerancePx = 0.1;
+constexpr int kMaxPerspectivePieces = 64;
 
 struct PixelAlpha {
   int pixel;
@@ -236,8 +241,27 @@ bool add_splat(const RenderView& view, const RenderOptions& options, const Eigen
   std::vector<Eigen::Vector3d> pc(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) pc[size_t(i)] = cam.to_camera(p_world[i]);
   const int first = int(out->primitives.size());
+  // Visibility, extent and shading are decided on the path's pieces (`pieces`: one per segment or
+  // dot); the primitives drawn may subdivide a piece (perspective below), so the set of particles
+  // drawn does not depend on the subdivision.
   double length_px = 0, max_a0 = 0, mean_radius = 0, total_weight = 0;
-  double bx0 = 1e300, bx1 = -1e300, by0 = 1e300, by1 = -1e300;
+  double bx0 = 1e300, bx1 = -1e300, by0 = 1e300, by1 = -1e300;  // of the pieces: outside the image?
+  double dy0 = 1e300, dy1 = -1e300;                             // of the primitives: rows touched
+  std::vector<std::pair<End, End>> pieces;
+  auto piece = [&](const End& a, const End& b, double weight) {
+    const double radius = 0.5 * (a.radius + b.radius);
+    const double mass = 0.5 * (a.mass + b.mass);
+    const double a0 = double(float(std::min(opacity, mass / (kPi * radius * radius))));
+    length_px += std::hypot(b.x - a.x, b.y - a.y);
+    max_a0 = std::max(max_a0, a0 * (radius < 0.5 ? kPi * radius * radius : 1.0));
+    mean_radius += radius * weight;
+    total_weight += weight;
+    bx0 = std::min({bx0, a.x - radius, b.x - radius});
+    bx1 = std::max({bx1, a.x + radius, b.x + radius});
+    by0 = std::min({by0, a.y - radius, b.y - radius});
+    by1 = std::max({by1, a.y + radius, b.y + radius});
+    pieces.emplace_back(a, b);
+  };
   auto push = [&](const End& a, const End& b, double weight) {
     SplatPrimitive pr;
     const double radius = 0.5 * (a.radius + b.radius);
@@ -248,20 +272,28 @@ bool add_splat(const RenderView& view, const RenderOptions& options, const Eigen
     pr.a0 = float(std::min(opacity, mass / (kPi * radius * radius)));
     pr.weight = float(weight);
     out->primitives.push_back(pr);
-    length_px += std::hypot(b.x - a.x, b.y - a.y);
-    max_a0 = std::max(max_a0, double(pr.a0) * (radius < 0.5 ? kPi * radius * radius : 1.0));
-    mean_radius += radius * weight;
-    total_weight += weight;
-    bx0 = std::min({bx0, a.x - radius, b.x - radius});
-    bx1 = std::max({bx1, a.x + radius, b.x + radius});
-    by0 = std::min({by0, a.y - radius, b.y - radius});
-    by1 = std::max({by1, a.y + radius, b.y + radius});
+    dy0 = std::min({dy0, a.y - radius, b.y - radius});
+    dy1 = std::max({dy1, a.y + radius, b.y + radius});
+  };
+  // Primitives per straight piece a-b (camera frame, constant speed): the image position f x / z and
+  // the footprint change non-linearly with time as the depth changes, while a primitive moves at
+  // constant image speed with a linearly blended footprint. The error at the piece's middle time
+  // (position and radius, pixels) falls as 1 / k^2 with k equal-time primitives; k keeps it below
+  // kPerspectiveTolerancePx. Far particles keep k = 1; a drop streaking past the lens needs several
+  // (its time is spent mostly at the far end of its streak).
+  auto perspective_pieces = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const End& ea, const End& eb) {
+    const End em = end_of(0.5 * (a + b));
+    const double err = std::max(std::hypot(em.x - 0.5 * (ea.x + eb.x), em.y - 0.5 * (ea.y + eb.y)),
+                                std::abs(em.radius - 0.5 * (ea.radius + eb.radius)));
+    if (!(err > kPerspectiveTolerancePx)) return 1;
+    return int(std::min(double(kMaxPerspectivePieces), std::ceil(std::sqrt(err / kPerspectiveTolerancePx))));
   };
   const double near = options.near_m;
   if (dots) {
     for (int i = 0; i < n; ++i) {
       if (!(pc[size_t(i)].z() >= near)) continue;
       const End e = end_of(pc[size_t(i)]);
+      piece(e, e, 1.0 / n);
       push(e, e, 1.0 / n);
     }
     // Dots of a moving particle trace the same streak: the span between the first and the last
@@ -283,7 +315,16 @@ bool add_splat(const RenderView& view, const RenderOptions& options, const Eigen
       const Eigen::Vector3d b2 = pc[size_t(i)] + ub * (pc[size_t(i) + 1] - pc[size_t(i)]);
       a = a2, b = b2;
       a.z() = std::max(a.z(), near), b.z() = std::max(b.z(), near);  // rounding at the clip
-      push(end_of(a), end_of(b), (ub - ua) / segments);
+      const End ea = end_of(a), eb = end_of(b);
+      const double weight = (ub - ua) / segments;
+      piece(ea, eb, weight);
+      const int k = perspective_pieces(a, b, ea, eb);
+      End prev = ea;
+      for (int j = 1; j <= k; ++j) {
+        const End next = j == k ? eb : end_of(a + (b - a) * (double(j) / k));
+        push(prev, next, weight / k);
+        prev = next;
+      }
     }
   }
   const int count = int(out->primitives.size()) - first;
@@ -305,12 +346,12 @@ bool add_splat(const RenderView& view, const RenderOptions& options, const Eigen
   s.first = first;
   s.count = count;
   s.source = source;
-  s.y_min = std::max(0, int(std::floor(by0)));
-  s.y_max = std::min(cam.height - 1, int(std::floor(by1)));
-  const SplatPrimitive& mid = out->primitives[size_t(first + count / 2)];
-  s.mid_x = 0.5f * (mid.x0 + mid.x1);
-  s.mid_y = 0.5f * (mid.y0 + mid.y1);
-  s.mid_z = 0.5f * (mid.z0 + mid.z1);
+  s.y_min = std::max(0, int(std::floor(std::min(by0, dy0))));
+  s.y_max = std::min(cam.height - 1, int(std::floor(std::max(by1, dy1))));
+  const std::pair<End, End>& mid = pieces[pieces.size() / 2];
+  s.mid_x = 0.5f * (float(mid.first.x) + float(mid.second.x));
+  s.mid_y = 0.5f * (float(mid.first.y) + float(mid.second.y));
+  s.mid_z = 0.5f * (float(mid.first.z) + float(mid.second.z));
   const Eigen::Vector3d pm = pc[size_t(n / 2)];
   s.mid_ray_m = float(pm.z() > 0 ? pm.norm() : double(s.mid_z));
   out->splats.push_back(s);
