@@ -215,7 +215,10 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.min_opacity = r.get_or("min_opacity", o.min_opacity);
   o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
   o.max_world_size = r.get_or("max_world_size", o.max_world_size);
-  o.large_prune = r.get_enum_or("large_prune", o.large_prune, {LargePrune::kCameraExtent, LargePrune::kDistance});
+  // Absent in runs and checkpoints written before the key existed (2026-11-25): they trained with
+  // the reference rule, and a resumed one must go on with it, not switch silently.
+  o.large_prune = r.get_enum_or("large_prune", LargePrune::kCameraExtent,
+                                {LargePrune::kCameraExtent, LargePrune::kDistance});
   o.max_gaussians = r.get_or<int64_t>("max_gaussians", o.max_gaussians);
   if (r.has("background")) {
     JsonReader b = r.child("background");

@@ -73,8 +73,19 @@ double Trainer::load_checkpoint(const std::string& path) {
   }
   JsonReader h(hj, path);
   const TrainOptions stored = TrainOptions::from_json(h.child("options"));
-  if (stored.to_json() != options_.to_json())
-    throw InputError(path, "checkpoint was written with different training options");
+  if (stored.to_json() != options_.to_json()) {
+    // Name every differing option and both values, so the user can pass the stored ones back.
+    const Json a = stored.to_json(), b = options_.to_json();
+    std::string diff;
+    for (auto it = a.begin(); it != a.end(); ++it) {
+      const auto jt = b.find(it.key());
+      if (jt != b.end() && *jt == it.value()) continue;
+      diff += (diff.empty() ? "" : ", ") + it.key() + ": checkpoint " + it.value().dump() + ", now " +
+              (jt == b.end() ? std::string("absent") : jt->dump());
+    }
+    throw InputError(path, "checkpoint was written with different training options (" + diff +
+                               "): resume with the checkpoint's values, or start over with --force");
+  }
   const int iteration = h.get<int>("iteration");
   const int sh_degree = h.get<int>("sh_degree");
   const size_t n = h.get<size_t>("num_gaussians");

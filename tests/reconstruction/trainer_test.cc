@@ -237,7 +237,12 @@ TEST(TrainerTest, ResumeFromCheckpointEqualsUninterruptedRun) {
   EXPECT_EQ(full.gaussians().opacity_logit, resumed.gaussians().opacity_logit);
   // Different options or a damaged file are input errors.
   Trainer other(s.views, point_init(s.truth, 3), busy_options(51), extent);
-  EXPECT_THROW(other.load_checkpoint(dir / "ckpt.bin"), InputError);
+  try {
+    other.load_checkpoint(dir / "ckpt.bin");
+    ADD_FAILURE() << "resumed with other options";
+  } catch (const InputError& e) {  // the message names the option and both values
+    EXPECT_NE(std::string(e.what()).find("iterations: checkpoint 50, now 51"), std::string::npos) << e.what();
+  }
   std::string bytes = read_file(dir / "ckpt.bin");
   write_file_atomic(dir / "cut.bin", bytes.substr(0, bytes.size() - 10));
   EXPECT_THROW(resumed.load_checkpoint(dir / "cut.bin"), InputError);
@@ -549,6 +554,11 @@ TEST(TrainerTest, OptionsAreValidated) {
   Json bad = j;
   bad["positon_lr_init"] = 1;  // misspelled key
   EXPECT_THROW(TrainOptions::from_json(JsonReader(bad, "x")), InputError);
+  // Stored options from before large_prune existed trained with the reference rule.
+  Json old = j;
+  old.erase("large_prune");
+  EXPECT_EQ(TrainOptions::from_json(JsonReader(old, "x")).large_prune, TrainOptions::LargePrune::kCameraExtent);
+  EXPECT_EQ(TrainOptions::from_json(JsonReader(j, "x")).large_prune, TrainOptions::LargePrune::kDistance);
 }
 
 }  // namespace
