@@ -395,6 +395,61 @@ std::optional<CapHit> DropScene::intersect_boundary(const Eigen::Vector3d& o, co
 }
 
 // ---------------------------------------------------------------------------------------------
+namespace {
+
+// One event of a ray in the glass slab (heights -h..0 below the water plane), or entering it from the
+// dry side: moves *o to the face it meets and refracts (or totally reflects) *d there. Returns false
+// when the ray runs parallel to the faces (it never leaves: numerically lost).
+bool slab_event(const GlassPlane& plane, const DropScene& scene, double h, double eta_glass, double eta_water,
+                Eigen::Vector3d* o, Eigen::Vector3d* d, bool* in_glass, bool* in_water, double* w,
+                double* w_camera, int* bounces, PathResult* res, std::vector<PathEvent>* events) {
+  const double height = plane.height(*o), dn = d->dot(plane.water_normal);
+  if (std::abs(dn) <= kParallelCos) return false;
+  // Entering from the dry side meets the inner face; inside, the ray heads for one of the two faces.
+  const bool outer = *in_glass && dn > 0;
+  const double t = outer ? -height / dn : (-h - height) / dn;
+  const Eigen::Vector3d p = *o + std::max(t, 0.0) * *d;
+  const bool into_water = outer && scene.in_footprint(p);
+  const double eta_i = *in_glass ? eta_glass : 1.0;
+  const double eta_t = *in_glass ? (into_water ? eta_water : 1.0) : eta_glass;
+  const Eigen::Vector3d n_facing = dn > 0 ? Eigen::Vector3d(-plane.water_normal) : plane.water_normal;
+  const double cos_i = std::clamp(-d->dot(n_facing), 0.0, 1.0);
+  const std::optional<Eigen::Vector3d> refracted = refract(*d, n_facing, eta_i, eta_t);
+  PathEvent e;
+  e.point = p;
+  e.normal = n_facing;
+  e.d_in = *d;
+  e.eta_i = eta_i;
+  e.eta_t = eta_t;
+  e.through_base = into_water;
+  e.glass_face = !into_water;
+  if (!refracted) {
+    e.total_internal_reflection = true;
+    e.reflectance = 1;
+    *d = reflect(*d, n_facing).normalized();
+    ++*bounces;
+    ++res->internal_reflections;
+  } else {
+    // A path that has not met water yet crosses clean glass: its reflections are in the clean image.
+    const bool counted = res->touched_water || into_water;
+    const double reflectance = counted ? fresnel_dielectric(cos_i, eta_i, eta_t) : 0.0;
+    e.reflectance = reflectance;
+    // As at a dry-side base (trace_path): reflected light heading back meets the camera.
+    if (into_water && reflect(*d, n_facing).z() <= kMinForwardZ) *w_camera += *w * reflectance;
+    *w *= 1 - reflectance;
+    *d = *refracted;
+    *in_water = into_water;
+    *in_glass = !*in_glass;
+    if (into_water) res->touched_water = true;
+  }
+  e.d_out = *d;
+  if (events) events->push_back(e);
+  *o = p;
+  return true;
+}
+
+}  // namespace
+
 PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const Eigen::Vector3d& d0,
                       const TraceOptions& options, std::vector<PathEvent>* events) {
   PathResult res;
@@ -404,6 +459,8 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
   double w = 1;  // weight of the followed path; the rest went to the environment or the camera
   double w_camera = 0;  // light sent back towards the camera: reflected from the dry side, or exiting backwards
   bool in_water = false;
+  const double h_glass = options.glass_thickness_m, eta_glass = options.glass_refractive_index;
+  bool in_glass = false;  // inside the slab (h_glass > 0 only)
   int skip_prim = -1, bounces = 0;
   // Every boundary event either changes medium or counts a bounce, so this only stops a ray that
   // keeps crossing overlapping drops.
@@ -417,6 +474,17 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
     // point ~0.03-1 m from the camera is ~1e-16 m; real crossings are >= nanometers apart).
     const double t_eps = 1e-12 + 1e-10 * o.norm();
     const double dn = d.dot(plane.water_normal);
+    if (h_glass > 0 && (in_glass || (!in_water && plane.height(o) < -0.5 * h_glass && dn > kParallelCos))) {
+      if (!slab_event(plane, scene, h_glass, eta_glass, eta_water, &o, &d, &in_glass, &in_water, &w, &w_camera,
+                      &bounces, &res, events))
+        break;
+      skip_prim = -1;
+      if (bounces > options.max_bounces) {
+        w = 0;
+        break;
+      }
+      continue;
+    }
     double t_plane = kInf;
     if (std::abs(dn) > kParallelCos) {
       const double t = -plane.height(o) / dn;
@@ -443,7 +511,9 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
     const Eigen::Vector3d p = o + t * d;
     const Eigen::Vector3d n_out = base_event ? Eigen::Vector3d(-plane.water_normal) : cap->normal;
     const Eigen::Vector3d n_facing = d.dot(n_out) < 0 ? n_out : Eigen::Vector3d(-n_out);
-    const double eta_i = in_water ? eta_water : 1.0, eta_t = in_water ? 1.0 : eta_water;
+    // With a slab, water leaves through its base into the glass (the thin glass: straight into air).
+    const bool into_glass = h_glass > 0 && base_event && in_water;
+    const double eta_i = in_water ? eta_water : 1.0, eta_t = in_water ? (into_glass ? eta_glass : 1.0) : eta_water;
     const double cos_i = std::clamp(-d.dot(n_facing), 0.0, 1.0);
     const double reflectance = fresnel_dielectric(cos_i, eta_i, eta_t);
     std::optional<Eigen::Vector3d> refracted = refract(d, n_facing, eta_i, eta_t);
@@ -470,6 +540,7 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
       w *= 1 - reflectance;
       d = *refracted;
       in_water = !in_water;
+      in_glass = into_glass;
     }
     e.d_out = d;
     if (events) events->push_back(e);
@@ -480,7 +551,7 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
       break;
     }
   }
-  if (in_water) {  // lost inside (numerically): no direction to look up
+  if (in_water || in_glass) {  // lost inside (numerically) or trapped: no direction to look up
     w = 0;
   }
   res.exit_direction = d;

@@ -114,6 +114,7 @@ struct PathEvent {
   double reflectance = 0;          // Fresnel; 1 under total internal reflection
   bool total_internal_reflection = false;
   bool through_base = false;       // at the flat base (through the thin glass) rather than the cap
+  bool glass_face = false;         // slab only: at a face of the glass where no drop sits
   int drop = -1;
 };
 
@@ -130,11 +131,20 @@ struct PathResult {
 struct TraceOptions {
   double refractive_index = kWaterRefractiveIndex;
   int max_bounces = 4;
+  // The glass the drops sit on: a slab of this thickness on the dry side of the water plane (0: the
+  // thin glass, which changes no direction and traps nothing).
+  double glass_thickness_m = 0;
+  double glass_refractive_index = kCrownGlassRefractiveIndex;
 };
 
 // Follows a camera ray (origin o, unit direction d, camera frame) through the water body: refraction
-// and Fresnel at every air-water boundary (the thin glass does not change directions: parallel
-// interfaces conserve n sin(theta)), total internal reflection up to max_bounces times. Light
+// and Fresnel at every boundary, total internal reflection up to max_bounces times. With
+// glass_thickness_m 0 the glass is thin (parallel interfaces conserve n sin(theta): it changes no
+// direction, and a water-air base stands for water-glass-air). With a slab, rays refract into it and
+// out of it, shift sideways, and light that total internal reflection traps in the glass (it meets
+// its dry faces beyond the critical angle) stays there until it finds a drop's base or the bounces
+// run out. The glass's own reflections on a path that never touched water belong to the clean image
+// and are not counted. Light
 // reflected at a boundary and not followed (Fresnel reflections, paths cut at max_bounces) takes the
 // environment radiance, except light sent back towards the camera (a reflection from the dry side
 // heading backwards, a path leaving the water backwards): camera_weight, which meets the camera

@@ -273,6 +273,8 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
   TraceOptions topt;
   topt.refractive_index = spec_.refractive_index;
   topt.max_bounces = spec_.max_bounces;
+  topt.glass_thickness_m = 1e-3 * spec_.glass_thickness_mm;
+  topt.glass_refractive_index = spec_.glass_refractive_index;
   const int spp = spec_.samples_per_pixel;
   const int nx = int(std::ceil(std::sqrt(double(spp))));
   const int ny = (spp + nx - 1) / nx;

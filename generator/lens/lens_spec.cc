@@ -39,6 +39,8 @@ LensDropletSpec parse_lens_droplet_spec(const JsonReader& r) {
                                     {RadiusDistribution::kLogUniform, RadiusDistribution::kUniform});
   s.contact_angle_deg = r.get_range_or("contact_angle_deg", s.contact_angle_deg);
   s.glass_distance_m = r.get_or<double>("glass_distance_m", s.glass_distance_m);
+  s.glass_thickness_mm = r.get_or<double>("glass_thickness_mm", s.glass_thickness_mm);
+  s.glass_refractive_index = r.get_or<double>("glass_refractive_index", s.glass_refractive_index);
   s.attach = r.get_enum_or("attach", s.attach, {Attach::kLens, Attach::kWindow});
   s.drop_side = r.get_enum_or("drop_side", s.drop_side, {DropSide::kScene, DropSide::kCamera});
   s.glass_tilt_deg = r.get_array_or<2>("glass_tilt_deg", s.glass_tilt_deg);
@@ -109,6 +111,12 @@ void validate_lens_droplet_spec(const LensDropletSpec& s, const std::string& whe
           "0 < min <= max < 180 degrees");
   require(fin(s.glass_distance_m) && s.glass_distance_m > 1e-4 && s.glass_distance_m <= 100, where,
           "glass_distance_m", num(s.glass_distance_m), "0.0001 < value <= 100 m");
+  require(fin(s.glass_thickness_mm) && s.glass_thickness_mm >= 0 && s.glass_thickness_mm <= 10, where,
+          "glass_thickness_mm", num(s.glass_thickness_mm), "0 (thin glass) <= value <= 10 mm");
+  require(s.glass_thickness_mm * 1e-3 < 0.5 * s.glass_distance_m, where, "glass_thickness_mm",
+          num(s.glass_thickness_mm), "less than half of glass_distance_m (the slab lies between the camera and the drops)");
+  require(fin(s.glass_refractive_index) && s.glass_refractive_index >= 1 && s.glass_refractive_index <= 2.5, where,
+          "glass_refractive_index", num(s.glass_refractive_index), "1 <= value <= 2.5");
   require(fin(s.glass_tilt_deg[0]) && fin(s.glass_tilt_deg[1]) && std::abs(s.glass_tilt_deg[0]) < 80 &&
               std::abs(s.glass_tilt_deg[1]) < 80,
           where, "glass_tilt_deg", "[" + num(s.glass_tilt_deg[0]) + ", " + num(s.glass_tilt_deg[1]) + "]",
@@ -165,6 +173,8 @@ Json lens_droplet_spec_to_json(const LensDropletSpec& s) {
   j["radius_distribution"] = to_string(s.radius_distribution);
   j["contact_angle_deg"] = {s.contact_angle_deg[0], s.contact_angle_deg[1]};
   j["glass_distance_m"] = s.glass_distance_m;
+  j["glass_thickness_mm"] = s.glass_thickness_mm;
+  j["glass_refractive_index"] = s.glass_refractive_index;
   j["attach"] = to_string(s.attach);
   j["drop_side"] = to_string(s.drop_side);
   j["glass_tilt_deg"] = {s.glass_tilt_deg[0], s.glass_tilt_deg[1]};

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/json_reader.h"
+#include "generator/lens/optics.h"
 
 namespace weathergs::lens {
 
@@ -46,6 +47,10 @@ struct LensDropletSpec {
   RadiusDistribution radius_distribution = RadiusDistribution::kLogUniform;
   std::array<double, 2> contact_angle_deg = {70, 70};  // uniform in [lo, hi], 0 < lo <= hi < 180
   double glass_distance_m = 0.03;                 // pinhole to glass along the optical axis
+  // The glass under the drops: a slab on the camera's side of their bases (0: thin glass, no
+  // refraction of its own; the paper style's). Physical style, lens attach: 1 mm unless given.
+  double glass_thickness_mm = 0;
+  double glass_refractive_index = kCrownGlassRefractiveIndex;
   Attach attach = Attach::kLens;
   DropSide drop_side = DropSide::kScene;
   std::array<double, 2> glass_tilt_deg = {0, 0};  // lens attach: rotation about camera x, then y

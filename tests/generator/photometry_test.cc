@@ -224,6 +224,25 @@ TEST(Photometry, LensDropEnvironmentDefaultsByStyle) {
   EXPECT_THROW(parse({{"effects", bad}}), InputError);
 }
 
+TEST(Photometry, LensDropCoverGlassDefaultsByStyleAndAttach) {
+  auto parse = [](const Json& j) { return parse_weather_spec(JsonReader(j, "spec.json")); };
+  const Json lens = {{"lens_droplets", {{"count", 5}}}};
+  // Physical, on the lens: a 1 mm cover glass (the Cycles reference's); paper and window: thin.
+  const WeatherSpec physical = parse({{"effects", lens}});
+  EXPECT_EQ(physical.lens_droplets->glass_thickness_mm, 1.0);
+  EXPECT_EQ(physical.to_json()["effects"]["lens_droplets"]["glass_thickness_mm"], 1.0);
+  EXPECT_EQ(parse({{"style", "paper"}, {"effects", lens}}).lens_droplets->glass_thickness_mm, 0.0);
+  const Json window = {{"lens_droplets", {{"count", 5}, {"attach", "window"}}}};
+  EXPECT_EQ(parse({{"effects", window}}).lens_droplets->glass_thickness_mm, 0.0);
+  // Given values win; a glass nearer than 4 mm gets a quarter of its distance, so the default is valid.
+  const Json thin = {{"lens_droplets", {{"count", 5}, {"glass_thickness_mm", 0}}}};
+  EXPECT_EQ(parse({{"effects", thin}}).lens_droplets->glass_thickness_mm, 0.0);
+  const Json near = {{"lens_droplets", {{"count", 5}, {"glass_distance_m", 0.002}}}};
+  EXPECT_DOUBLE_EQ(parse({{"effects", near}}).lens_droplets->glass_thickness_mm, 0.5);
+  // The resolved spec parses back to the same glass.
+  EXPECT_EQ(parse(physical.to_json()).lens_droplets->glass_thickness_mm, 1.0);
+}
+
 TEST(Photometry, LensDropCameraRadianceDefaultsByStyleAndAttach) {
   auto parse = [](const Json& j) { return parse_weather_spec(JsonReader(j, "spec.json")); };
   const Json lens = {{"lens_droplets", {{"count", 5}}}};

@@ -189,9 +189,11 @@ std::vector<PlacedDrop> random_drops(const GlassPlane& plane, int n, uint64_t se
 }
 
 TEST_F(LensPathTest, SnellAndEnergyHoldAtSampledHits) {
-  int refractions = 0, tirs = 0, through_base = 0;
+  int refractions = 0, tirs = 0, through_base = 0, glass_tirs = 0;
+  for (double glass_mm : {0.0, 1.0})
   for (bool camera_side : {false, true}) {
     for (CapGeometry geometry : {CapGeometry::kAnalytic, CapGeometry::kTriangles}) {
+      options.glass_thickness_m = 1e-3 * glass_mm;
       GlassPlane plane = test_plane(0.03, camera_side);
       DropScene scene(device, plane, random_drops(plane, 40, camera_side ? 2 : 1), geometry, 32);
       Rng rng(5, 0, 0);
@@ -220,6 +222,7 @@ TEST_F(LensPathTest, SnellAndEnergyHoldAtSampledHits) {
           const double sin_i = e.d_in.cross(e.normal).norm();
           if (e.total_internal_reflection) {
             ++tirs;
+            glass_tirs += e.glass_face;
             EXPECT_GT(e.eta_i * sin_i, e.eta_t * (1 - 1e-12));
             EXPECT_NEAR((e.d_out - reflect(e.d_in, e.normal)).norm(), 0, kDirTol);
           } else {
@@ -228,6 +231,11 @@ TEST_F(LensPathTest, SnellAndEnergyHoldAtSampledHits) {
             EXPECT_NEAR(e.eta_i * sin_i, e.eta_t * e.d_out.cross(e.normal).norm(), kDirTol);
             EXPECT_NEAR(e.d_out.dot(e.d_in.cross(e.normal)), 0, kDirTol);
             EXPECT_LE(e.d_out.dot(e.normal), 0);
+          }
+          if (e.glass_face) {  // the slab's inner face (-h) or its outer face between drops (0)
+            const double h = plane.height(e.point);
+            EXPECT_TRUE(std::abs(h) < kPointTol || std::abs(h + options.glass_thickness_m) < kPointTol) << h;
+            continue;
           }
           if (geometry == CapGeometry::kAnalytic && !e.through_base) {
             // The crossing lies on its drop's sphere, on the water side of the glass.
@@ -244,7 +252,40 @@ TEST_F(LensPathTest, SnellAndEnergyHoldAtSampledHits) {
   }
   EXPECT_GT(refractions, 5000);
   EXPECT_GT(tirs, 20) << "the field must exercise total internal reflection";
+  EXPECT_GT(glass_tirs, 5) << "and light trapped in the slab";
   EXPECT_GT(through_base, 1000);
+}
+
+TEST_F(LensPathTest, GlassSlabShiftsRaysAndLeavesCleanGlassUnchanged) {
+  // One drop on the scene side of a glass at 3 cm. Through a 1 mm slab (n = 1.52) a camera ray at
+  // angle a refracts to asin(sin a / 1.52) and meets the drop's base h (tan a - tan a_g) nearer the
+  // axis than the thin glass's straight ray; a ray that misses the drops leaves in its own direction.
+  constexpr double kH = 1e-3;
+  GlassPlane plane = test_plane(0.03, false);
+  const PlacedDrop drop = test_drop(0, plane, 0.009, 0, 2e-3, 60);
+  DropScene scene(device, plane, {drop}, CapGeometry::kAnalytic, 48);
+  TraceOptions thin = options, slab = options;
+  slab.glass_thickness_m = kH;
+  for (double x_base : {0.0085, 0.0095}) {
+    const Vec3 d = Vec3(x_base, 0, 0.03).normalized();
+    std::vector<PathEvent> ev_thin, ev_slab;
+    trace_path(scene, Vec3::Zero(), d, thin, &ev_thin);
+    const PathResult r = trace_path(scene, Vec3::Zero(), d, slab, &ev_slab);
+    ASSERT_TRUE(r.touched_water);
+    ASSERT_GE(ev_slab.size(), 2u);
+    EXPECT_TRUE(ev_slab[0].glass_face);    // air -> glass at the inner face
+    EXPECT_TRUE(ev_slab[1].through_base);  // glass -> water under the drop
+    const double sin_a = d.x(), tan_a = d.x() / d.z();
+    const double sin_g = sin_a / kCrownGlassRefractiveIndex, tan_g = sin_g / std::sqrt(1 - sin_g * sin_g);
+    EXPECT_NEAR(ev_thin[0].point.x() - ev_slab[1].point.x(), kH * (tan_a - tan_g), 1e-12);
+    // Both enter the water at the same angle (n sin is conserved across parallel faces).
+    EXPECT_NEAR((ev_slab[1].d_out - ev_thin[0].d_out).norm(), 0, kDirTol);
+  }
+  const Vec3 d_clear = Vec3(-0.2, 0.1, 1).normalized();
+  const PathResult r = trace_path(scene, Vec3::Zero(), d_clear, slab);
+  EXPECT_FALSE(r.touched_water);
+  EXPECT_EQ(r.scene_weight, 1);
+  EXPECT_NEAR((r.exit_direction - d_clear).norm(), 0, kDirTol);
 }
 
 TEST_F(LensPathTest, GrazingRimRaysStayFinite) {

@@ -42,6 +42,8 @@ TEST(LensSpecTest, DatasetFormatExampleAndDefaults) {
   EXPECT_FALSE(s.environment_radiance.has_value());
   LensDropletSpec empty = parse("{}");
   EXPECT_EQ(empty.count, 60);
+  EXPECT_EQ(empty.glass_thickness_mm, 0);  // the thin glass unless given (the physical style gives 1 mm)
+  EXPECT_EQ(empty.glass_refractive_index, kCrownGlassRefractiveIndex);
 }
 
 TEST(LensSpecTest, ResolvedJsonRoundTrips) {
@@ -68,6 +70,10 @@ TEST(LensSpecTest, ErrorsNameTheKeyAndTheRule) {
   EXPECT_NE(error_of(R"({"contact_angle_deg": 180})").find("< 180"), std::string::npos);
   EXPECT_NE(error_of(R"({"contact_angle_deg": 0})").find("contact_angle_deg"), std::string::npos);
   EXPECT_NE(error_of(R"({"attach": "car"})").find("\"lens\", \"window\""), std::string::npos);
+  EXPECT_NE(error_of(R"({"glass_thickness_mm": -1})").find("glass_thickness_mm"), std::string::npos);
+  EXPECT_NE(error_of(R"({"glass_distance_m": 0.004, "glass_thickness_mm": 3})").find("half of glass_distance_m"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"glass_refractive_index": 0.9})").find("glass_refractive_index"), std::string::npos);
   EXPECT_NE(error_of(R"({"glass_distance_m": 0})").find("glass_distance_m"), std::string::npos);
   EXPECT_NE(error_of(R"({"samples_per_pixel": 0})").find("samples_per_pixel"), std::string::npos);
   EXPECT_NE(error_of(R"({"refractive_index": 0.5})").find("refractive_index"), std::string::npos);
