@@ -40,7 +40,9 @@ std::vector<std::unique_ptr<WeatherStage>> make_stages(const WeatherSpec& spec, 
   std::vector<std::unique_ptr<WeatherStage>> stages;
   if (spec.fog) stages.push_back(std::make_unique<FogStage>(spec.fog->beta_per_m, airlight));
   for (const auto* effect : {&spec.rain, &spec.snow})
-    if (*effect) stages.push_back(std::make_unique<ParticleStage>(**effect, spec.render, spec.seed, manifest, spec.sun));
+    if (*effect)
+      stages.push_back(std::make_unique<ParticleStage>(**effect, (*effect)->render_for(spec.render), spec.seed,
+                                                       manifest, spec.sun));
   // The paper style's per-view 2D layers come after the world-space particles (the paper's OpenCV
   // step ran on the rendered images).
   for (const auto* effect : {&spec.rain, &spec.snow})

@@ -103,6 +103,12 @@ ParticleEffectSpec parse_particles(const JsonReader& r, Species species, Weather
     pp.finish();
   }
   if (e.overlay) e.overlay->rate_scale = o.rate_mm_h / intensity_rate_mm_h(species, Intensity::kHeavy);
+  if (r.has("visibility_cutoff")) {
+    e.visibility_cutoff = r.get<double>("visibility_cutoff");
+    if (!(*e.visibility_cutoff > 0 && *e.visibility_cutoff < 1))
+      throw InputError(r.where("visibility_cutoff"), "expected a peak alpha in (0, 1), got " +
+                                                         std::to_string(*e.visibility_cutoff));
+  }
   o.size_classes = r.get_or<int>("size_classes", o.size_classes);
   o.particles_per_cell = r.get_or<double>("particles_per_cell", o.particles_per_cell);
   o.opacity = r.get_or<double>("opacity", o.opacity);
@@ -170,6 +176,7 @@ Json particles_to_json(const ParticleEffectSpec& e) {
             {"opacity", o.opacity},
             {"appearance", appearance_to_json(e.appearance, o.species)}};
   if (e.intensity) j["intensity"] = to_string(*e.intensity);
+  if (e.visibility_cutoff) j["visibility_cutoff"] = *e.visibility_cutoff;
   if (o.size_scale != 1 || o.density_scale != 1 || e.overlay) {
     j["paper"] = {{"size_scale", o.size_scale}, {"density_scale", o.density_scale}};
     if (e.overlay) j["paper"]["overlay"] = e.overlay->to_json();
@@ -336,6 +343,11 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
   if (!effects.is_object()) throw InputError(effects.where(), "expected an object of effects");
   if (effects.has("rain")) spec.rain = parse_particles(effects.child("rain"), Species::kRain, spec.style, ignore_paper);
   if (effects.has("snow")) spec.snow = parse_particles(effects.child("snow"), Species::kSnow, spec.style, ignore_paper);
+  // Physical snow draws its faint flakes too, unless the spec sets a cutoff (a resolved spec written
+  // before this default always does, so re-applying it reproduces its images).
+  const bool cutoff_given = r.has("render") && r.child("render").has("visibility_cutoff");
+  if (spec.snow && spec.style == WeatherStyle::kPhysical && !spec.snow->visibility_cutoff && !cutoff_given)
+    spec.snow->visibility_cutoff = kPhysicalSnowVisibilityCutoff;
   if (effects.has("fog")) {
     JsonReader f = effects.child("fog");
     if (!f.is_object()) throw InputError(f.where(), "expected an object");

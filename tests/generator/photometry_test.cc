@@ -224,6 +224,35 @@ TEST(Photometry, LensDropEnvironmentDefaultsByStyle) {
   EXPECT_THROW(parse({{"effects", bad}}), InputError);
 }
 
+TEST(Photometry, PhysicalSnowDrawsItsFaintFlakes) {
+  auto parse = [](const Json& j) { return parse_weather_spec(JsonReader(j, "spec.json")); };
+  const Json snow = {{"snow", {{"rate_mm_h", 2.5}}}}, rain = {{"rain", {{"rate_mm_h", 25}}}};
+  // Physical snow: the cutoff its whole population agrees with Cycles at; rain and the paper style
+  // keep the render block's.
+  const WeatherSpec s = parse({{"effects", snow}});
+  ASSERT_TRUE(s.snow->visibility_cutoff.has_value());
+  EXPECT_EQ(*s.snow->visibility_cutoff, kPhysicalSnowVisibilityCutoff);
+  EXPECT_EQ(s.snow->render_for(s.render).visibility_cutoff, kPhysicalSnowVisibilityCutoff);
+  EXPECT_EQ(s.render.visibility_cutoff, RenderOptions{}.visibility_cutoff);
+  EXPECT_FALSE(parse({{"effects", rain}}).rain->visibility_cutoff.has_value());
+  EXPECT_FALSE(parse({{"style", "paper"}, {"effects", snow}}).snow->visibility_cutoff.has_value());
+  // A cutoff the spec gives wins: the render block's for every species, the effect's for its own.
+  const WeatherSpec given = parse({{"effects", snow}, {"render", {{"visibility_cutoff", 0.005}}}});
+  EXPECT_FALSE(given.snow->visibility_cutoff.has_value());
+  EXPECT_EQ(given.snow->render_for(given.render).visibility_cutoff, 0.005);
+  const WeatherSpec own = parse({{"effects", {{"snow", {{"rate_mm_h", 2.5}, {"visibility_cutoff", 0.02}}}}}});
+  EXPECT_EQ(*own.snow->visibility_cutoff, 0.02);
+  // The resolved spec says so and parses back to it; one written before the default (a render block
+  // with its cutoff, no effect key) keeps its cutoff.
+  EXPECT_EQ(s.to_json()["effects"]["snow"]["visibility_cutoff"], kPhysicalSnowVisibilityCutoff);
+  EXPECT_EQ(*parse(s.to_json()).snow->visibility_cutoff, kPhysicalSnowVisibilityCutoff);
+  Json old = s.to_json();
+  old["effects"]["snow"].erase("visibility_cutoff");
+  EXPECT_FALSE(parse(old).snow->visibility_cutoff.has_value());
+  const Json bad = {{"snow", {{"rate_mm_h", 2.5}, {"visibility_cutoff", 0}}}};
+  EXPECT_THROW(parse({{"effects", bad}}), InputError);
+}
+
 TEST(Photometry, LensDropCoverGlassDefaultsByStyleAndAttach) {
   auto parse = [](const Json& j) { return parse_weather_spec(JsonReader(j, "spec.json")); };
   const Json lens = {{"lens_droplets", {{"count", 5}}}};
