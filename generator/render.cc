@@ -247,7 +247,8 @@ bool add_splat(const RenderView& view, const RenderOptions& options, const Eigen
   double length_px = 0, max_a0 = 0, mean_radius = 0, total_weight = 0;
   double bx0 = 1e300, bx1 = -1e300, by0 = 1e300, by1 = -1e300;  // of the pieces: outside the image?
   double dy0 = 1e300, dy1 = -1e300;                             // of the primitives: rows touched
-  std::vector<std::pair<End, End>> pieces;
+  thread_local std::vector<std::pair<End, End>> pieces;  // no allocation per particle
+  pieces.clear();
   auto piece = [&](const End& a, const End& b, double weight) {
     const double radius = 0.5 * (a.radius + b.radius);
     const double mass = 0.5 * (a.mass + b.mass);

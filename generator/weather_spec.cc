@@ -12,12 +12,13 @@ namespace weathergs {
 
 namespace {
 
+// Physical style: the cover glass under lens drops (1 mm of crown glass, as the Cycles reference's).
+constexpr double kPhysicalCoverGlassMm = 1.0;
+
 // Paper-style exaggerations (docs/generator.md, "Styles"). The paper's Blender particles were objects
 // of centimetres, nearly opaque: these scales bring our drops (0.5-3 mm radius) and flakes
 // (1-5 mm) to that size; the populated distance is cut to the scene's depth so the count stays
 // affordable.
-// Physical style: the cover glass under lens drops (1 mm of crown glass, as the Cycles reference's).
-constexpr double kPhysicalCoverGlassMm = 1.0;
 constexpr double kPaperRainSizeScale = 6.0;
 constexpr double kPaperSnowSizeScale = 3.0;
 constexpr double kPaperRainOpacity = 1.0;
