@@ -280,8 +280,8 @@ bool add_splat(const RenderView& view, const RenderOptions& options, const Eigen
   // the footprint change non-linearly with time as the depth changes, while a primitive moves at
   // constant image speed with a linearly blended footprint. The error at the piece's middle time
   // (position and radius, pixels) falls as 1 / k^2 with k equal-time primitives; k keeps it below
-  // kPerspectiveTolerancePx. Far particles keep k = 1; a drop streaking past the lens needs several
-  // (its time is spent mostly at the far end of its streak).
+  // kPerspectiveTolerancePx. Far particles keep k = 1; a drop moving in depth near the lens needs
+  // several (it spends more of the exposure at its streak's far end, where its footprint is smaller).
   auto perspective_pieces = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b, const End& ea, const End& eb) {
     const End em = end_of(0.5 * (a + b));
     const double err = std::max(std::hypot(em.x - 0.5 * (ea.x + eb.x), em.y - 0.5 * (ea.y + eb.y)),
