@@ -23,6 +23,7 @@
 #include <string>
 
 #include "core/json_reader.h"
+#include "generator/lens/optics.h"
 
 namespace weathergs::datagen {
 
@@ -41,11 +42,11 @@ struct CyclesValidationOptions {
   std::string reference_dataset;
   bool reuse_renders = false;     // keep out_dir's Cycles renders when they were made from the same job
   // Lens drops: the cover glass they sit on, modelled in the reference as a slab on the camera side
-  // of the drops (the generator's glass is a plane: a parallel plate turns no ray, it only shifts
-  // rays sideways and reflects a few percent). 1 mm of crown glass (n 1.52, BK7's at 587 nm) is our
-  // choice of a typical cover; 0 leaves the plate out (the reference before the second pass of 2026-11-25).
+  // of the drops (the generator's `glass_thickness_mm`: a slab, or 0 for its thin glass, which turns
+  // no ray). 1 mm of crown glass is our choice of a typical cover (the physical style's default too);
+  // 0 leaves the plate out (the reference before the second pass of 2026-11-25).
   double glass_thickness_m = 1e-3;
-  double glass_refractive_index = 1.52;
+  double glass_refractive_index = lens::kCrownGlassRefractiveIndex;
   // Lens drops: a dark camera front 1 mm behind the aperture, so light the drops or the glass send back
   // towards the camera meets the camera (as on a real one), not the sky behind an invisible camera.
   bool camera_body = true;
