@@ -4,6 +4,7 @@ import os
 
 import bmesh
 import bpy
+import numpy as np
 from mathutils import Matrix, Vector
 
 # ---------------------------------------------------------------------------------------------------
@@ -170,12 +171,88 @@ def water_material(name, ior):
     return water
 
 
+# Icosphere levels (bmesh subdivisions, 320 / 80 faces) by kind and radius in pixels: the view of a
+# heavy snowfall holds hundreds of thousands of flakes, and a far one needs no fine mesh. Measured on
+# one moving sphere (smooth-shaded, area-scaled as below, 64 samples), against 320 faces: a
+# Lambertian flake of 80 faces sends 1.2 % less light (20 faces: 5.7 % less); a refracting drop of 80
+# faces 15 % less (20 faces: 66 % less), so drops, a few thousand at most, always get 320.
+SPHERE_LEVELS = {"rain": ((0.0, 3),), "snow": ((1.0, 3), (0.0, 2))}  # ((radius_px at least, subdivisions), ...)
+
+
+def sphere_template(subdivisions):
+    """A unit icosphere scaled so that its mean projected area is pi (a polyhedron's is a quarter of its
+    surface, Cauchy's formula): the tessellated sphere covers as much of the image, on average, as the
+    true one (unscaled, 80 faces cover 0.928 of it, 20 faces 0.762). Returns (vertices, triangles)."""
+    bm = bmesh.new()
+    bmesh.ops.create_icosphere(bm, subdivisions=subdivisions, radius=1.0)
+    bm.verts.index_update()
+    scale = math.sqrt(4.0 * math.pi / sum(f.calc_area() for f in bm.faces))
+    verts = np.array([tuple(v.co) for v in bm.verts], dtype=np.float64) * scale
+    tris = np.array([[v.index for v in f.verts] for f in bm.faces], dtype=np.int64)
+    bm.free()
+    return verts, tris
+
+
+def moving_spheres(name, kind, items, exposure_s, material):
+    """All spheres of one kind as one smooth-shaded mesh whose shape key moves every sphere linearly from
+    p_world (shutter open, frame 1) to p_world + v_world * exposure_s (frame 2): Cycles' deformation
+    motion blur then smears each exactly as an object moving on that line would be, and building it
+    takes seconds where one object per particle took tens of minutes for 10^5 particles."""
+    starts, ends, tris = [], [], []
+    offset = 0
+    levels = SPHERE_LEVELS[kind]
+
+    def level_of(p):  # without radius_px (a hand-made job): the finest
+        return next(level for min_px, level in levels if p.get("radius_px", math.inf) >= min_px)
+
+    for _, level in levels:
+        group = [p for p in items if level_of(p) == level]
+        if not group:
+            continue
+        unit, faces = sphere_template(level)
+        radius = np.array([p["radius_m"] for p in group])[:, None, None]
+        p0 = np.array([p["p_world"] for p in group])[:, None, :]
+        p1 = p0 + np.array([p["v_world"] for p in group])[:, None, :] * exposure_s
+        starts.append((p0 + radius * unit[None]).reshape(-1, 3))
+        ends.append((p1 + radius * unit[None]).reshape(-1, 3))
+        n = len(unit)
+        tris.append((faces[None] + offset + n * np.arange(len(group))[:, None, None]).reshape(-1, 3))
+        offset += n * len(group)
+    start, end, tris = np.concatenate(starts), np.concatenate(ends), np.concatenate(tris)
+    mesh = bpy.data.meshes.new(name)
+    mesh.vertices.add(len(start))
+    mesh.vertices.foreach_set("co", start.astype(np.float32).ravel())
+    mesh.loops.add(3 * len(tris))
+    mesh.loops.foreach_set("vertex_index", tris.astype(np.int32).ravel())
+    mesh.polygons.add(len(tris))
+    mesh.polygons.foreach_set("loop_start", np.arange(0, 3 * len(tris), 3, dtype=np.int32))
+    mesh.polygons.foreach_set("loop_total", np.full(len(tris), 3, dtype=np.int32))
+    mesh.polygons.foreach_set("use_smooth", np.ones(len(tris), dtype=bool))
+    mesh.update()
+    mesh.validate()
+    mesh.materials.append(material)
+    obj = bpy.data.objects.new(name, mesh)
+    obj.shape_key_add(name="open")
+    key = obj.shape_key_add(name="close")
+    key.data.foreach_set("co", end.astype(np.float32).ravel())
+    key.value = 0.0
+    key.keyframe_insert("value", frame=1)
+    key.value = 1.0
+    key.keyframe_insert("value", frame=2)
+    for fc in mesh.shape_keys.animation_data.action.fcurves:
+        for kp in fc.keyframe_points:
+            kp.interpolation = "LINEAR"
+    obj.cycles.use_motion_blur = True
+    obj.cycles.use_deform_motion = True
+    return obj
+
+
 def add_particles(particles):
     """Airborne particles for the path-tracer validation only (docs/scenes.md): rain drops as water
     spheres (glass, IOR 1.333), snow flakes as Lambertian spheres (particles["snow"]: albedo,
-    opacity), each moving linearly from
-    p_world (shutter open) by v_world * exposure_s, rendered with Cycles motion blur. Returns the
-    collection (hidden per view with "particles": false)."""
+    opacity), each moving linearly from p_world (shutter open) by v_world * exposure_s, rendered with
+    Cycles motion blur (moving_spheres; an item's optional radius_px picks its tessellation). Returns
+    the collection (hidden per view with "particles": false)."""
     coll = bpy.data.collections.new("particles")
     bpy.context.scene.collection.children.link(coll)
     water = water_material("water_drop", 1.333)
@@ -205,32 +282,12 @@ def add_particles(particles):
     nt.links.new(diffuse.outputs[0], mix.inputs[2])
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(mix.outputs[0], out.inputs["Surface"])
-    meshes = {}
     dt = particles["exposure_s"]
-    for i, p in enumerate(particles["items"]):
-        kind = p["kind"]
-        if kind not in meshes:
-            bm = bmesh.new()
-            bmesh.ops.create_icosphere(bm, subdivisions=2, radius=1.0)
-            mesh = bpy.data.meshes.new("particle_" + kind)
-            for f in bm.faces:
-                f.smooth = True
-            bm.to_mesh(mesh)
-            bm.free()
-            mesh.materials.append(water if kind == "rain" else flake)
-            meshes[kind] = mesh
-        obj = bpy.data.objects.new(f"particle{i}", meshes[kind])
-        obj.scale = (p["radius_m"],) * 3
-        p0 = Vector(p["p_world"])
-        p1 = p0 + Vector(p["v_world"]) * dt
-        obj.location = p0
-        obj.keyframe_insert("location", frame=1)
-        obj.location = p1
-        obj.keyframe_insert("location", frame=2)
-        for fc in obj.animation_data.action.fcurves:
-            for kp in fc.keyframe_points:
-                kp.interpolation = "LINEAR"
-        coll.objects.link(obj)
+    for kind in ("rain", "snow"):
+        items = [p for p in particles["items"] if p["kind"] == kind]
+        if items:
+            obj = moving_spheres("particles_" + kind, kind, items, dt, water if kind == "rain" else flake)
+            coll.objects.link(obj)
     scene = bpy.context.scene
     scene.render.use_motion_blur = True
     scene.render.motion_blur_shutter = 1.0  # frames: exactly frame 1 -> 2, i.e. the exposure
