@@ -22,6 +22,26 @@ using testing::TempDir;
 // where more than a tenth of the disc covers the pixel.
 constexpr double kEndTolerancePx = 1.5;
 
+// Writes `job` into `dir`, renders it with Blender and returns whether it ran.
+::testing::AssertionResult render_job(Json job, const fs::path& dir) {
+  job["output_dir"] = dir / "render";
+  fs::create_directories(dir / "render");
+  write_file_atomic(dir / "job.json", job.dump());
+  ProcessOptions popts;
+  popts.log_path = dir / "blender.log";
+  const ProcessResult r = run_process({"blender", "-b", "--factory-startup", "--python-exit-code", "1", "--python",
+                                       testing::blender_script(), "--", dir / "job.json"},
+                                      "blender", popts);
+  if (r.exit_code == 0) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "blender exited " << r.exit_code << "\n" << tail_of_file(popts.log_path, 30);
+}
+
+Json one_particle(const Camera& cam, const Eigen::Vector3d& p, const Eigen::Vector3d& v, double radius, Json extra) {
+  Json item = {{"kind", "snow"}, {"radius_m", radius}, {"p_world", {p.x(), p.y(), p.z()}}, {"v_world", {v.x(), v.y(), v.z()}}};
+  item.update(extra);
+  return {{"exposure_s", cam.exposure_s}, {"items", Json::array({item})}};
+}
+
 TEST(CyclesShutterTest, MotionBlurCoversTheProjectedPath) {
   if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
   const SceneSpec scene = read_scene_spec(std::string(WEATHERGS_SOURCE_DIR) + "/scenes/pool.json");
@@ -38,20 +58,8 @@ TEST(CyclesShutterTest, MotionBlurCoversTheProjectedPath) {
   Json job = blender_job(scene, scene.variant("clear"), profile, {plain, moving}, {});
   job["camera"]["views"][0]["particles"] = false;
   job["camera"]["views"][1]["particles"] = true;
-  job["particles"] = {{"exposure_s", cam.exposure_s},
-                      {"items", {{{"kind", "snow"}, {"radius_m", radius},
-                                  {"p_world", {p0.x(), p0.y(), p0.z()}}, {"v_world", {v.x(), v.y(), v.z()}}}}}};
-  job["output_dir"] = tmp / "render";
-  fs::create_directories(tmp / "render");
-  write_file_atomic(tmp / "job.json", job.dump());
-  ProcessOptions popts;
-  popts.log_path = tmp / "blender.log";
-  BlenderOptions bo;
-  bo.script = testing::blender_script();
-  const ProcessResult r = run_process({"blender", "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-                                       bo.script, "--", tmp / "job.json"},
-                                      "blender", popts);
-  ASSERT_EQ(r.exit_code, 0) << tail_of_file(popts.log_path, 30);
+  job["particles"] = one_particle(cam, p0, v, radius, Json::object());
+  ASSERT_TRUE(render_job(job, tmp.path()));
 
   const Image a = read_image(tmp / "render/clean/plain.png");
   const Image b = read_image(tmp / "render/clean/moving.png");
@@ -101,18 +109,8 @@ TEST(CyclesShutterTest, EveryTessellationCoversTheSpheresDisc) {
     Json job = blender_job(scene, scene.variant("clear"), profile, {cam}, {});
     job["camera"]["views"][0]["coverage"] = true;
     job["render"]["float_images"] = true;
-    job["particles"] = {{"exposure_s", cam.exposure_s},
-                        {"items", {{{"kind", "snow"}, {"radius_m", radius}, {"radius_px", radius_px_hint},
-                                    {"p_world", {p.x(), p.y(), p.z()}}, {"v_world", {0.0, 0.0, 0.0}}}}}};
-    job["output_dir"] = tmp / "render";
-    fs::create_directories(tmp / "render");
-    write_file_atomic(tmp / "job.json", job.dump());
-    ProcessOptions popts;
-    popts.log_path = tmp / "blender.log";
-    const ProcessResult r = run_process({"blender", "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-                                         testing::blender_script(), "--", tmp / "job.json"},
-                                        "blender", popts);
-    ASSERT_EQ(r.exit_code, 0) << tail_of_file(popts.log_path, 30);
+    job["particles"] = one_particle(cam, p, Eigen::Vector3d::Zero(), radius, {{"radius_px", radius_px_hint}});
+    ASSERT_TRUE(render_job(job, tmp.path()));
     const Image c = read_image(tmp / "render/clean/coverage.exr");
     double covered = 0;
     for (int y = 0; y < c.height; ++y)
