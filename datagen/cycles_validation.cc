@@ -218,17 +218,10 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
                                         "lower visibility_cutoff or near_m");
       drawn = std::move(ref);
     }
-    const double f_px = std::sqrt(cam.fx * cam.fy);
     for (const ManifestParticle& p : drawn) {
       particles.push_back(p);
-      // The largest pinhole radius in pixels along the path: the Blender side picks each sphere's
-      // tessellation by it (a far flake needs no fine mesh; hundreds of thousands of them must fit).
-      const double z_near = std::min(cam.to_camera(p.p_world).z(),
-                                     cam.to_camera(p.p_world + p.v_world * cam.exposure_s).z());
-      const double radius_px = z_near > 0 ? f_px * p.radius_m / z_near : 1e9;
       items.push_back({{"kind", p.kind},
                        {"radius_m", p.radius_m},
-                       {"radius_px", radius_px},
                        {"p_world", {p.p_world.x(), p.p_world.y(), p.p_world.z()}},
                        {"v_world", {p.v_world.x(), p.v_world.y(), p.v_world.z()}}});
     }
