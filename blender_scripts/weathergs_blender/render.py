@@ -278,6 +278,9 @@ def add_particles(particles):
     out = nt.nodes.new("ShaderNodeOutputMaterial")
     nt.links.new(mix.outputs[0], out.inputs["Surface"])
     dt = particles["exposure_s"]
+    unknown = {p["kind"] for p in particles["items"]} - {"rain", "snow"}
+    if unknown:
+        raise ValueError(f"particles: unknown kinds {sorted(unknown)} (rain and snow are known)")
     for kind in ("rain", "snow"):
         items = [p for p in particles["items"] if p["kind"] == kind]
         if items:
