@@ -1,6 +1,6 @@
 // Path-tracer validation of the weather compositor: datagen/cycles_validation.h does the work.
 //
-//   bench_datagen_cycles_validation --dataset DIR [--view 001] [--samples 256] [--nearest 20] [--out DIR]
+//   bench_datagen_cycles_validation --dataset DIR [--view 001] [--samples 256] [--coverage-samples 8xS] [--nearest 20] [--out DIR]
 //                                   [--blender blender] [--reuse-renders] [--glass-mm 1] [--glass-ior 1.52] [--no-camera-body]
 //                                   [--reference-dataset DIR]
 #include <cstdio>
@@ -26,13 +26,14 @@ int main(int argc, char** argv) {
       else if (k == "--out") o.out_dir = next();
       else if (k == "--samples") o.samples = std::stoi(next());
       else if (k == "--nearest") o.nearest = std::stoi(next());
+      else if (k == "--coverage-samples") o.coverage_samples = std::stoi(next());
       else if (k == "--blender") o.blender = next();
       else if (k == "--reuse-renders") o.reuse_renders = true;
       else if (k == "--glass-mm") o.glass_thickness_m = 1e-3 * std::stod(next());
       else if (k == "--glass-ior") o.glass_refractive_index = std::stod(next());
       else if (k == "--reference-dataset") o.reference_dataset = next();
       else if (k == "--no-camera-body") o.camera_body = false;
-      else throw InputError(k, "unknown option (expected --dataset, --view, --samples, --nearest, --out, --blender, "
+      else throw InputError(k, "unknown option (expected --dataset, --view, --samples, --coverage-samples, --nearest, --out, --blender, "
                                "--reuse-renders, --glass-mm, --glass-ior, --no-camera-body, --reference-dataset)");
     }
     Json result = datagen::validate_against_cycles(o);

@@ -112,6 +112,9 @@ def run(job):
             plugs_coll.hide_render = glass_coll.hide_render or not lens_coll.hide_render
         if render["engine"] == "cycles":
             scene.cycles.seed = view.get("seed", render["seed"])
+            # A view may ask for its own sample count (the validation's coverage view: its Monte
+            # Carlo noise decides how well the streak ends are measured).
+            scene.cycles.samples = view.get("samples", render["samples"])
         fo.file_slots[0].path = view["name"] + "_"
         ext = ".exr" if render.get("float_images", False) else ".png"
         scene.render.filepath = os.path.join(out_dir, image_dir, view["name"] + ext)

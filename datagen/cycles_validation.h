@@ -27,11 +27,18 @@
 
 namespace weathergs::datagen {
 
+constexpr int kCoverageSampleFactor = 8;
+
 struct CyclesValidationOptions {
   std::string dataset;            // required
   std::string view = "001";
   int samples = 256;              // Cycles samples per pixel
   int nearest = 20;               // particles whose streak extents are compared
+  // Samples of the coverage view alone (0: kCoverageSampleFactor x samples). A streak's coverage is
+  // a few thousandths per pixel, so its relative Monte Carlo noise per pixel is ~sqrt(1 / (p N)):
+  // 57 % at 1024 samples, 20 % at 8192, and the noise, not the renderer, then decides the measured
+  // streak ends (benchmarks/README.md). The view holds only the particles, so it is cheap.
+  int coverage_samples = 0;
   std::string out_dir = "cycles_validation";  // job, Blender log, renders, result.json
   std::string blender = "blender";
   std::string blender_script;     // blender_scripts/render_scene.py (required)
@@ -60,7 +67,7 @@ struct CyclesValidationOptions {
 // its noise variance removed), energy_ratio_cpp_over_cycles, mean_layer_{cycles,cpp},
 // streak_end_error_{median,max}_px over `streaks` (10%/90% quantiles of each streak's |layer| along
 // its projected path; the nearest `nearest` particles with both ends in the image and at most half of
-// their capsule under other particles' streaks), coverage_streak_end_error_{median,max}_px (the same
+// each tenth of their capsule under other particles' streaks), coverage_streak_end_error_{median,max}_px (the same
 // quantiles of the coverage: Cycles' coverage render against 1 - prod(1 - alpha) of the generator's
 // alpha layers; null when one side shows nothing of a streak), the seconds of both renderers and their
 // ratio. Lens drops: no streak figures; glass_plate_mm, glass_transmission and camera_body record the

@@ -41,20 +41,34 @@ Json one_particle(const Camera& cam, const Eigen::Vector3d& p, const Eigen::Vect
   return {{"exposure_s", cam.exposure_s}, {"items", Json::array({item})}};
 }
 
+// A sphere crossing pool's first view: 1.5 m ahead, starting 0.2 m left of the axis, moving right
+// by `travel` over the exposure. Jobs for two views of that camera named a and b.
+struct Crossing {
+  SceneSpec scene = read_scene_spec(std::string(WEATHERGS_SOURCE_DIR) + "/scenes/pool.json");
+  ProfileSpec profile;
+  Camera cam;
+  Eigen::Vector3d p0, v;
+  Crossing(const ProfileSpec& p, double travel) : profile(p), cam(scene_cameras(scene, p)[0]) {
+    const Eigen::Vector3d forward = cam.rotation().row(2).transpose(), right = cam.rotation().row(0).transpose();
+    p0 = cam.center_world() + 1.5 * forward - 0.2 * right;
+    v = right * travel / cam.exposure_s;
+  }
+  Json job(const std::string& a, const std::string& b) const {
+    Camera ca = cam, cb = cam;
+    ca.name = a;
+    cb.name = b;
+    return blender_job(scene, scene.variant("clear"), profile, {ca, cb}, {});
+  }
+};
+
 TEST(CyclesShutterTest, MotionBlurCoversTheProjectedPath) {
   if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
-  const SceneSpec scene = read_scene_spec(std::string(WEATHERGS_SOURCE_DIR) + "/scenes/pool.json");
-  ProfileSpec profile{"shutter", 300, 200, 1, 32, "cycles"};
-  Camera cam = scene_cameras(scene, profile)[0];
-  Camera plain = cam, moving = cam;
-  plain.name = "plain";
-  moving.name = "moving";
-  const Eigen::Vector3d forward = cam.rotation().row(2).transpose(), right = cam.rotation().row(0).transpose();
-  const double radius = 0.02, travel = 0.4;
-  const Eigen::Vector3d p0 = cam.center_world() + 1.5 * forward - 0.2 * right;
-  const Eigen::Vector3d v = right * travel / cam.exposure_s;
+  const Crossing crossing({"shutter", 300, 200, 1, 32, "cycles"}, 0.4);
+  const Camera& cam = crossing.cam;
+  const Eigen::Vector3d p0 = crossing.p0, v = crossing.v;
+  const double radius = 0.02;
   TempDir tmp;
-  Json job = blender_job(scene, scene.variant("clear"), profile, {plain, moving}, {});
+  Json job = crossing.job("plain", "moving");
   job["camera"]["views"][0]["particles"] = false;
   job["camera"]["views"][1]["particles"] = true;
   job["particles"] = one_particle(cam, p0, v, radius);
@@ -115,6 +129,33 @@ TEST(CyclesShutterTest, TheSphereCoversItsDisc) {
     for (int x = 0; x < c.width; ++x) covered += c.at(x, y, 0);
   EXPECT_NEAR(covered / disc_px, 1.0, kCoverageTolerance);
   std::printf("coverage %.1f px^2, disc %.1f px^2 (%.4f)\n", covered, disc_px, covered / disc_px);
+}
+
+// A view's own "samples" overrides the job's (the validation renders its coverage view with more):
+// one sample per pixel leaves every pixel of a moving sphere's smear at 0 or 1 (one time sample,
+// one filter sample), 64 samples leave fractional coverage along the whole smear.
+TEST(CyclesShutterTest, AViewMayAskForItsOwnSampleCount) {
+  if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
+  const Crossing crossing({"samples", 120, 80, 1, 64, "cycles"}, 0.4);
+  TempDir tmp;
+  Json job = crossing.job("one", "many");
+  for (int i = 0; i < 2; ++i) job["camera"]["views"][i]["coverage"] = true;
+  job["camera"]["views"][0]["samples"] = 1;
+  job["render"]["float_images"] = true;
+  job["particles"] = one_particle(crossing.cam, crossing.p0, crossing.v, 0.02);
+  ASSERT_TRUE(render_job(job, tmp.path()));
+  auto fractional = [&](const std::string& name, int* covered) {
+    const Image c = read_image(tmp / ("render/clean/" + name + ".exr"));
+    int n = 0;
+    *covered = 0;
+    for (float v : c.data) n += v > 0.01f && v < 0.99f, *covered += v > 0.01f;
+    return n;
+  };
+  int covered_one = 0, covered_many = 0;
+  const int frac_one = fractional("one", &covered_one), frac_many = fractional("many", &covered_many);
+  ASSERT_GT(covered_many, 30) << "the smear is not in the view";
+  EXPECT_EQ(frac_one, 0) << "1 sample per pixel gives only 0 or 1";
+  EXPECT_GT(frac_many, covered_many / 2);
 }
 
 }  // namespace

@@ -29,8 +29,11 @@ constexpr double kMinGainRainDb = 4.5, kMinGainSnowDb = 8.0;
 constexpr double kEnergyRatioLo = 0.75, kEnergyRatioHi = 1.15;
 constexpr double kMaxMedianStreakErrorPx = 2.5;
 // The extents measured on the particles' coverage (Cycles' coverage render against the generator's
-// alpha layers), free of shading: at the quick profile the median is within 1 px (2026-11-25).
-constexpr double kMaxMedianCoverageStreakErrorPx = 1.5;
+// alpha layers), free of shading: at the quick profile the median is within 1 px (2026-11-25). Since
+// the coverage view has 8x the samples and only streaks clear along their whole path are compared
+// (2026-11-26), every streak's ends agree: here median 0.82 / max 1.00 px over 10 rain streaks, at
+// the quick profile 0.24-0.81 / 1.19-1.24 px (benchmarks/README.md; 2.9-4.1 px before at worst).
+constexpr double kMaxMedianCoverageStreakErrorPx = 1.5, kMaxCoverageStreakErrorPx = 2.5;
 
 std::string scene_path(const std::string& name) { return std::string(WEATHERGS_SOURCE_DIR) + "/scenes/" + name; }
 
@@ -85,6 +88,8 @@ void validate(const TempDir& tmp, const std::string& variant, const char* specie
   EXPECT_LE(r["streak_end_error_median_px"].get<double>(), kMaxMedianStreakErrorPx);
   ASSERT_TRUE(r["coverage_streak_end_error_median_px"].is_number());
   EXPECT_LE(r["coverage_streak_end_error_median_px"].get<double>(), kMaxMedianCoverageStreakErrorPx);
+  ASSERT_TRUE(r["coverage_streak_end_error_max_px"].is_number());
+  EXPECT_LE(r["coverage_streak_end_error_max_px"].get<double>(), kMaxCoverageStreakErrorPx);
 }
 
 TEST(CyclesValidation, HeavyRainAgreesWithThePathTracer) {
@@ -165,6 +170,9 @@ TEST(CyclesValidation, BadOptionsAndMissingDatasetAreInputErrors) {
   o.samples = 0;
   EXPECT_THROW(validate_against_cycles(o), InputError);
   o.samples = 16;
+  o.coverage_samples = -1;
+  EXPECT_THROW(o.validate(), InputError);
+  o.coverage_samples = 0;  // 8x samples
   o.glass_thickness_m = -1e-3;
   EXPECT_THROW(o.validate(), InputError);
   o.glass_thickness_m = 1e-3;
