@@ -117,12 +117,12 @@ struct Capsule {
   }
 };
 
+constexpr int kStreakSegments = 10;  // tenths of a path, each mostly clear of other streaks (below)
+
 // Where along the path the streak lies: the path parameters below which 10% and 90% of the layer's
 // |value| inside the capsule lie, in pixels from the path's start, over the pixels no other
 // particle's capsule touches (`shared` counts capsules per pixel). Robust to Monte Carlo noise (a
 // quantile of the whole streak, not a threshold per pixel).
-constexpr int kStreakSegments = 10;  // tenths of a path, each mostly clear of other streaks
-
 struct Extent {
   double start_px = 0, end_px = 0;
   bool found = false;

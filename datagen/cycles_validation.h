@@ -69,8 +69,8 @@ struct CyclesValidationOptions {
 // its projected path; the nearest `nearest` particles with both ends in the image and at most half of
 // each tenth of their capsule under other particles' streaks), coverage_streak_end_error_{median,max}_px (the same
 // quantiles of the coverage: Cycles' coverage render against 1 - prod(1 - alpha) of the generator's
-// alpha layers; null when one side shows nothing of a streak), the seconds of both renderers and their
-// ratio. Lens drops: no streak figures; glass_plate_mm, glass_transmission and camera_body record the
+// alpha layers, whose Cycles view has cycles_coverage_samples; null when one side shows nothing of a
+// streak), the seconds of both renderers and their ratio. Lens drops: no streak figures; glass_plate_mm, glass_transmission and camera_body record the
 // reference's glass and body.
 Json validate_against_cycles(const CyclesValidationOptions& options);
 
