@@ -75,6 +75,12 @@ Json blender_job(const SceneSpec& scene, const VariantSpec& variant, const Profi
           {"markers", marker_list}};
 }
 
+ProcessResult run_blender_job(const std::string& executable, const std::string& script, const std::string& job_path,
+                              const std::string& what, const ProcessOptions& options) {
+  return run_process({executable, "-b", "--factory-startup", "--python-exit-code", "1", "--python", script, "--", job_path},
+                     what, options);
+}
+
 RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& variant_name, const std::string& profile_name,
                                    const std::string& out_dir, const BlenderOptions& options,
                                    const std::vector<Marker>& markers) {
@@ -99,9 +105,8 @@ RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& va
   ProcessOptions popts;
   popts.log_path = log_path;
   popts.timeout_s = options.timeout_s;
-  const ProcessResult run = run_process({options.executable, "-b", "--factory-startup", "--python-exit-code", "1",
-                                         "--python", options.script, "--", job_path},
-                                        "blender (" + options.executable + ")", popts);
+  const ProcessResult run =
+      run_blender_job(options.executable, options.script, job_path, "blender (" + options.executable + ")", popts);
   const fs::path error_file = raw / "error.json";
   if (fs::exists(error_file)) {
     // The script reports spec errors with their location in the scene file.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/json_reader.h"
+#include "datagen/process.h"
 #include "datagen/scene_spec.h"
 
 namespace weathergs::datagen {
@@ -28,6 +29,11 @@ struct Marker {
   Eigen::Vector3d p_world = Eigen::Vector3d::Zero();
   double radius_m = 0.05;
 };
+
+// Runs `script` (render_scene.py) on the job file in background Blender with factory settings; an
+// exception in the script exits with code 1. The one command line every caller uses.
+ProcessResult run_blender_job(const std::string& executable, const std::string& script, const std::string& job_path,
+                              const std::string& what, const ProcessOptions& options);
 
 // The job file for the script, without output_dir (the cache key is a hash of it).
 Json blender_job(const SceneSpec& scene, const VariantSpec& variant, const ProfileSpec& profile,

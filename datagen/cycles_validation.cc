@@ -328,9 +328,7 @@ Json validate_against_cycles(const CyclesValidationOptions& o) {
     ProcessOptions popts;
     popts.log_path = fs::absolute(o.out_dir).string() + "/blender.log";
     fs::remove(popts.log_path);
-    const ProcessResult r = run_process({o.blender, "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-                                         o.blender_script, "--", job_path},
-                                        "blender", popts);
+    const ProcessResult r = run_blender_job(o.blender, o.blender_script, job_path, "blender", popts);
     if (r.exit_code != 0) throw InputError("blender", "failed:\n" + tail_of_file(popts.log_path));
   }
   const Json log = read_json_file(raw + "/render_log.json");

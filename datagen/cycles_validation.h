@@ -63,15 +63,16 @@ struct CyclesValidationOptions {
 // Runs Cycles and compares; returns (and writes to out_dir/result.json) the figures:
 // psnr_weather_layer[_box4]_db, psnr_no_weather_baseline[_box4]_db, psnr_cycles_seed_vs_seed[_box4]_db,
 // gain_over_no_weather_box4_db, changed_fraction_{cycles,cpp} and changed_iou (where the 4x4-averaged
-// layers change the view by more than 0.02, and the IoU of those regions), energy_box4_{cycles,cpp} (RMS of the 4x4-averaged layer; Cycles' with
-// its noise variance removed), energy_ratio_cpp_over_cycles, mean_layer_{cycles,cpp},
-// streak_end_error_{median,max}_px over `streaks` (10%/90% quantiles of each streak's |layer| along
-// its projected path; the nearest `nearest` particles with both ends in the image and at most half of
-// each tenth of their capsule under other particles' streaks), coverage_streak_end_error_{median,max}_px (the same
-// quantiles of the coverage: Cycles' coverage render against 1 - prod(1 - alpha) of the generator's
-// alpha layers, whose Cycles view has cycles_coverage_samples; null when one side shows nothing of a
-// streak), the seconds of both renderers and their ratio. Lens drops: no streak figures; glass_plate_mm, glass_transmission and camera_body record the
-// reference's glass and body.
+// layers change the view by more than 0.02, and the IoU of those regions), energy_box4_{cycles,cpp}
+// (RMS of the 4x4-averaged layer; Cycles' with its noise variance removed),
+// energy_ratio_cpp_over_cycles, mean_layer_{cycles,cpp}, streak_end_error_{median,max}_px over
+// `streaks` (10%/90% quantiles of each streak's |layer| along its projected path; the nearest
+// `nearest` particles with both ends in the image and at most half of each tenth of their capsule
+// under other particles' streaks), coverage_streak_end_error_{median,max}_px (the same quantiles of
+// the coverage: Cycles' coverage render, with cycles_coverage_samples, against 1 - prod(1 - alpha) of
+// the generator's alpha layers; null when one side shows nothing of a streak), the seconds of both
+// renderers and their ratio. Lens drops: no streak figures; glass_plate_mm, glass_transmission and
+// camera_body record the reference's glass and body.
 Json validate_against_cycles(const CyclesValidationOptions& options);
 
 }  // namespace weathergs::datagen

@@ -29,9 +29,7 @@ constexpr double kEndTolerancePx = 1.5;
   write_file_atomic(dir / "job.json", job.dump());
   ProcessOptions popts;
   popts.log_path = dir / "blender.log";
-  const ProcessResult r = run_process({"blender", "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-                                       testing::blender_script(), "--", dir / "job.json"},
-                                      "blender", popts);
+  const ProcessResult r = run_blender_job("blender", testing::blender_script(), dir / "job.json", "blender", popts);
   if (r.exit_code == 0) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "blender exited " << r.exit_code << "\n" << tail_of_file(popts.log_path, 30);
 }
