@@ -89,7 +89,7 @@ Command make(CLI::App& root) {
                   "over all pixels); docs/reconstruction.md")
       ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
   sub->add_option("--large-prune", a->large_prune,
-                  "Large-Gaussian prune (after the first opacity reset): distance (a Gaussian may be up to max_world_size x the "
+                  "Large-Gaussian prune (from large_prune_from on: the reference's first opacity reset, scaled with the run): distance (a Gaussian may be up to max_world_size x the "
                   "larger of the cameras' extent and its distance from the rig) or camera_extent (the reference: max_world_size x "
                   "the cameras' extent; collapses forward-facing scenes at 30,000 iterations); docs/reconstruction.md")
       ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));

@@ -30,6 +30,7 @@ Json schedule_json(const TrainOptions& e) {
           {"densify_until", e.densify_until},
           {"densification_interval", e.densification_interval},
           {"opacity_reset_interval", e.opacity_reset_interval},
+          {"large_prune_from", e.large_prune_from},
           {"sh_degree_interval", e.sh_degree_interval}};
 }
 

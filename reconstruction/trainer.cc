@@ -70,6 +70,7 @@ void TrainOptions::validate(const std::string& where) const {
   if (sh_degree_interval < 1) fail("sh_degree_interval", std::to_string(sh_degree_interval), "must be >= 1");
   if (densification_interval < 1)
     fail("densification_interval", std::to_string(densification_interval), "must be >= 1");
+  if (large_prune_from < 0) fail("large_prune_from", std::to_string(large_prune_from), "must be >= 0");
   if (opacity_reset_interval < 1)
     fail("opacity_reset_interval", std::to_string(opacity_reset_interval), "must be >= 1");
   if (!(min_opacity >= 0 && min_opacity < 1)) fail("min_opacity", std::to_string(min_opacity), "must be in [0, 1)");
@@ -114,6 +115,7 @@ Json TrainOptions::to_json() const {
               {"min_opacity", min_opacity},
               {"max_screen_size_px", max_screen_size_px},
               {"max_world_size", max_world_size},
+              {"large_prune_from", large_prune_from},
               {"large_prune", to_string(large_prune)},
               {"max_gaussians", max_gaussians},
               {"background", {background[0], background[1], background[2]}},
@@ -168,6 +170,7 @@ TrainOptions TrainOptions::effective() const {
   };
   e.densify_from = scaled(densify_from, ref.densify_from, 0);
   e.densify_until = scaled(densify_until, ref.densify_until, 1);
+  e.large_prune_from = scaled(large_prune_from, ref.large_prune_from, 0);
   // densification_interval is not scaled below the reference's 100 iterations: that is the time a
   // split or cloned Gaussian gets to settle before it is judged again, whatever the run length.
   // Scaled (to 10 at 2000 iterations), copies that had not settled were split again at the next
@@ -215,6 +218,7 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.min_opacity = r.get_or("min_opacity", o.min_opacity);
   o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
   o.max_world_size = r.get_or("max_world_size", o.max_world_size);
+  o.large_prune_from = r.get_or("large_prune_from", o.large_prune_from);
   // Absent in runs and checkpoints written before the key existed (2026-11-25): they trained with
   // the reference rule, and a resumed one must go on with it, not switch silently.
   o.large_prune = r.get_enum_or("large_prune", LargePrune::kCameraExtent,
@@ -433,7 +437,7 @@ IterationStats Trainer::step() {
       grad_count_[i] += 1;
     }
     if (densify_now) {
-      densify_and_prune(it > options_.opacity_reset_interval);
+      densify_and_prune(it > options_.large_prune_from);
       stats.densified = true;
       // The reference replaces every parameter tensor here, leaving them without gradients, so
       // its optimizer.step() of this iteration updates nothing.

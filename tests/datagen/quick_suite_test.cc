@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <string>
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
@@ -17,6 +18,14 @@ namespace {
 
 using testing::TempDir;
 constexpr double kMaxReprojectionErrorPx = 1.0;  // the bar
+// SfM points: the clean views give 520-1000 (data/suite_paper, 2026-11-26), so 200 says the scenes
+// are textured enough to reconstruct. The weathered views carry the paper-style weather, which is
+// meant to hurt (docs/scenes.md): their models keep 17-46% of the clean points (124-328 over two
+// generations, tanabata_rain lowest) with every view registered, and 3DGS trains from such a cloud (pool_rain's
+// ~190 points, docs/study.md). Their floor of 100 catches a broken export or an SfM that lost the
+// scene, not the weather doing its job.
+constexpr int kMinCleanPoints = 200;
+constexpr int kMinWeatheredPoints = 100;
 
 TEST(QuickSuiteTest, SixVariantsFromScratch) {
   if (find_executable("blender").empty() || find_executable("colmap").empty()) GTEST_SKIP() << "tools missing";
@@ -33,8 +42,9 @@ TEST(QuickSuiteTest, SixVariantsFromScratch) {
     EXPECT_EQ(ds.cameras.size(), 16u);
     EXPECT_EQ(ds.cameras[0].width, 300);
     for (const char* model : {"sparse", "sparse_clean"}) {
+      const int min_points = std::string(model) == "sparse" ? kMinWeatheredPoints : kMinCleanPoints;
       EXPECT_EQ(v[model]["registered_images"], 16) << ds.info.name;
-      EXPECT_GT(v[model]["points"].get<int>(), 200) << ds.info.name;
+      EXPECT_GT(v[model]["points"].get<int>(), min_points) << ds.info.name << " " << model;
       EXPECT_LT(v[model]["mean_reprojection_error_px"].get<double>(), kMaxReprojectionErrorPx) << ds.info.name;
     }
   }

@@ -23,6 +23,7 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
   EXPECT_EQ(e.densification_interval, 100);
   EXPECT_EQ(e.opacity_reset_interval, 3000);
   EXPECT_EQ(e.sh_degree_interval, 100);
+  EXPECT_EQ(e.large_prune_from, 300);  // the reference's first reset (3000 of 30000), scaled
   // The last reset (the last multiple of the interval below densify_until) leaves > half the run.
   for (int iterations : {200, 700, 3000, 7000, 29999}) {
     o.iterations = iterations;

@@ -172,7 +172,7 @@ TEST(TrainerTest, MaxGaussiansCapsDensificationDeterministically) {
   EXPECT_THROW(bad.validate("x"), InputError);
 }
 
-// The large-Gaussian prune after the first reset: with kCameraExtent (the reference) a Gaussian
+// The large-Gaussian prune (after large_prune_from): with kCameraExtent (the reference) a Gaussian
 // larger than max_world_size x the cameras' extent goes wherever it is; with kDistance (default) the
 // limit grows with its distance from the rig, so a large Gaussian far away (the sky, a distant
 // facade of a forward-facing capture) stays while one as large inside the rig still goes.
@@ -198,9 +198,9 @@ TEST(TrainerTest, LargePruneByDistanceKeepsFarLargeGaussians) {
     TrainOptions o;
     o.iterations = 2;
     o.schedule = TrainOptions::Schedule::kReference;
-    o.densify_from = 1;  // densify (and prune) at iteration 2, after the "reset" at iteration 1
+    o.densify_from = 1;  // densify (and prune) at iteration 2, after large_prune_from
     o.densification_interval = 2;
-    o.opacity_reset_interval = 1;
+    o.large_prune_from = 1;
     o.densify_grad_threshold = 1e9;  // no clone or split: only the prune changes the set
     o.large_prune = mode;
     Trainer t(s.views, init, o, extent);
@@ -213,6 +213,27 @@ TEST(TrainerTest, LargePruneByDistanceKeepsFarLargeGaussians) {
   ASSERT_EQ(by_extent.size(), 40u);    // both large ones pruned, as the reference does
   ASSERT_EQ(by_distance.size(), 41u);  // the far one kept
   EXPECT_NEAR(by_distance.position[40 * 3 + 2], center.z() + 30, 0.1);
+
+  // A short run (scaled schedule) never resets opacity, yet prunes from its scaled
+  // large_prune_from on: 300 iterations densify 5..150 every 18 and prune large ones after 30.
+  // Before, the prune waited for a reset and the near one (a veil in front of the rig) stayed.
+  TrainOptions short_run;
+  short_run.iterations = 300;
+  short_run.densify_grad_threshold = 1e9;
+  const TrainOptions e = short_run.effective();
+  ASSERT_EQ(e.large_prune_from, 30);
+  ASSERT_GT(e.opacity_reset_interval, short_run.iterations);
+  Trainer t(s.views, init, short_run, extent);
+  auto near_one_kept = [&] {  // the only Gaussian larger than 0.3 (the scene's are 0.05)
+    const GaussianSet<float>& g = t.gaussians();
+    for (size_t i = 0; i < g.size(); ++i)
+      if (std::exp(g.log_scale[i * 3]) > 0.3f && std::abs(g.position[i * 3 + 2] - center.z()) < 1) return true;
+    return false;
+  };
+  while (t.iteration() < e.large_prune_from) t.step();
+  EXPECT_TRUE(near_one_kept());  // densification steps before large_prune_from do not prune it
+  while (t.iteration() < 2 * e.large_prune_from) t.step();
+  EXPECT_FALSE(near_one_kept());
   EXPECT_EQ(parse_large_prune("camera_extent", "x"), TrainOptions::LargePrune::kCameraExtent);
   EXPECT_THROW(parse_large_prune("sky", "--large-prune"), InputError);
 }
