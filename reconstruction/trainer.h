@@ -48,8 +48,8 @@ struct TrainOptions {
   // The large-Gaussian prune runs at densification steps after this iteration: the reference's first
   // opacity reset (graphdeco prunes large Gaussians from its first reset on, gsplat from step >
   // reset_every), scaled with the run like densify_from. It is its own field because short runs
-  // never reset: tied to the reset, runs under ~6000 iterations never pruned, and one sparse SfM
-  // outlier 5 m from the rig grew into a 17 m veil in front of every view (docs/reconstruction.md).
+  // never reset: tied to the reset, runs under ~6000 iterations never pruned, and one SfM outlier
+  // near the rig grew into a veil in front of every view (docs/reconstruction.md).
   int large_prune_from = 3000;
   // The length max_world_size is a fraction of. kCameraExtent: the cameras' extent (the reference's
   // getNerfppNorm radius) for every Gaussian. kDistance (default): per Gaussian, the larger of that
@@ -66,16 +66,15 @@ struct TrainOptions {
   int64_t max_gaussians = 1200000;
   std::array<double, 3> background = {0, 0, 0};  // sRGB in [0, 1]
   // Short runs: the reference schedule (densify from 500 to 15000 every 100, reset opacity every
-  // 3000, SH degree + 1 every 1000) is made for 30000 iterations; run as is, `--iterations 3000` ends
-  // on a reset. kScaled (default) scales densify_from, densify_until, large_prune_from and
-  // sh_degree_interval by
-  // s = iterations / 30000 (when s < 1), so densification happens in the first half and the second
-  // half recovers. densification_interval keeps the reference's 100 (the time a new Gaussian gets
-  // to settle; scaled to 10 it ran away on heavy weather) unless that leaves fewer than 8
-  // densification steps (runs under ~1600 iterations), and the reset interval keeps at least
-  // the reference's 30 densification steps per reset, so runs up to 6000 iterations never reset.
-  // s >= 1 leaves the reference's. Only fields still at their reference value are changed; a value
-  // set by hand is kept (docs/reconstruction.md, "Schedule for short runs").
+  // 3000, SH degree + 1 every 1000) is made for 30000 iterations; run as is, `--iterations 3000`
+  // ends on a reset. kScaled (default) scales densify_from, densify_until, large_prune_from and
+  // sh_degree_interval by s = iterations / 30000 (when s < 1), so densification happens in the
+  // first half and the second half recovers. densification_interval keeps the reference's 100 (the
+  // time a new Gaussian gets to settle; scaled to 10 it ran away on heavy weather) unless that
+  // leaves fewer than 8 densification steps (runs under ~1600 iterations), and the reset interval
+  // keeps at least the reference's 30 densification steps per reset, so runs up to 6000 iterations
+  // never reset. s >= 1 leaves the reference's. Only fields still at their reference value are
+  // changed; a value set by hand is kept (docs/reconstruction.md, "Schedule for short runs").
   enum class Schedule { kReference, kScaled };
   Schedule schedule = Schedule::kScaled;
   // kRobustFilter: the robust-3dgs baseline's per-pixel distractor mask (reconstruction/robust_mask.h)

@@ -580,6 +580,14 @@ TEST(TrainerTest, OptionsAreValidated) {
   old.erase("large_prune");
   EXPECT_EQ(TrainOptions::from_json(JsonReader(old, "x")).large_prune, TrainOptions::LargePrune::kCameraExtent);
   EXPECT_EQ(TrainOptions::from_json(JsonReader(j, "x")).large_prune, TrainOptions::LargePrune::kDistance);
+  // ... and from before large_prune_from existed, pruned after their first reset: a checkpoint's
+  // (effective) options of a 1500-iteration run reset at 2700, which is when it would have pruned.
+  old = TrainOptions{}.to_json();
+  old.erase("large_prune_from");
+  old["opacity_reset_interval"] = 2700;
+  EXPECT_EQ(TrainOptions::from_json(JsonReader(old, "x")).large_prune_from, 2700);
+  o.large_prune_from = -1;
+  EXPECT_THROW(o.validate("x"), InputError);
 }
 
 }  // namespace
