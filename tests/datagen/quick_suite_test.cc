@@ -21,9 +21,9 @@ constexpr double kMaxReprojectionErrorPx = 1.0;  // the issue's bar
 // SfM points: the clean views give 520-1000 (data/suite_paper, 2026-11-26), so 200 says the scenes
 // are textured enough to reconstruct. The weathered views carry the paper-style weather, which is
 // meant to hurt (docs/scenes.md): their models keep 17-46% of the clean points (124-328 over two
-// generations, tanabata_rain lowest) with every view registered, and 3DGS trains from such a cloud (pool_rain's
-// ~190 points, docs/study.md). Their floor of 100 catches a broken export or an SfM that lost the
-// scene, not the weather doing its job.
+// generations, tanabata_rain lowest) with every view registered, and 3DGS trains from such a cloud
+// (pool_rain's ~190 points, docs/study.md). Their floor of 100 catches a broken export or an SfM
+// that lost the scene, not the weather doing its job.
 constexpr int kMinCleanPoints = 200;
 constexpr int kMinWeatheredPoints = 100;
 
