@@ -48,6 +48,7 @@ int run_train(TrainArgs& args) {
     if (!given("--mask-normalization")) o.train.mask_normalization = stored.train.mask_normalization;
     if (!given("--in-the-wild")) o.train.in_the_wild = stored.train.in_the_wild;
     if (!given("--large-prune")) o.train.large_prune = stored.train.large_prune;
+    if (!given("--large-prune-from")) o.train.large_prune_from = stored.train.large_prune_from;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
@@ -126,6 +127,10 @@ Command make_train(CLI::App& root) {
                   "larger of the cameras' extent and its distance from the rig) or camera_extent (the reference: max_world_size x "
                   "the cameras' extent; collapses forward-facing scenes at 30,000 iterations); docs/reconstruction.md")
       ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));
+  sub->add_option("--large-prune-from", o.train.large_prune_from,
+                  "Iteration after which the large-Gaussian prune runs (at densification steps); the default, the "
+                  "reference's first opacity reset, is scaled with --iterations like the densification window")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   sub->add_option("--random-init-count", o.train.random_init_count,
                   "Gaussians for random initialization when the dataset has no COLMAP points")
       ->capture_default_str();

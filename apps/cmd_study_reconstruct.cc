@@ -93,6 +93,10 @@ Command make(CLI::App& root) {
                   "larger of the cameras' extent and its distance from the rig) or camera_extent (the reference: max_world_size x "
                   "the cameras' extent; collapses forward-facing scenes at 30,000 iterations); docs/reconstruction.md")
       ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));
+  sub->add_option("--large-prune-from", a->options.large_prune_from,
+                  "3DGS methods: iteration after which the large-Gaussian prune runs; the default, the reference's "
+                  "first opacity reset, is scaled with --iterations (docs/reconstruction.md)")
+      ->capture_default_str()->check(CLI::NonNegativeNumber);
   sub->add_option("--distractor-opacity-weight", a->options.distractor_opacity_weight,
                   "desplat: opacity penalty of the per-view distractor Gaussians (docs/reconstruction.md)")
       ->capture_default_str()->check(CLI::NonNegativeNumber);

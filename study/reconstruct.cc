@@ -201,6 +201,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     t.train.random_init_count = o.random_init_count;
     t.train.mask_normalization = o.mask_normalization;
     t.train.large_prune = o.large_prune;
+    t.train.large_prune_from = o.large_prune_from;
     if (r.robust) t.train.robust = recon::TrainOptions::Robust::kRobustFilter;
     t.train.distractors_per_view = r.distractors_per_view;
     t.train.distractor_opacity_weight = o.distractor_opacity_weight;

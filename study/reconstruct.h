@@ -46,6 +46,8 @@ struct ReconstructOptions {
   recon::MaskNormalization mask_normalization = recon::MaskNormalization::kValid;
   // What the large-Gaussian prune's threshold is a fraction of (recon::TrainOptions::LargePrune).
   recon::TrainOptions::LargePrune large_prune = recon::TrainOptions{}.large_prune;
+  // When that prune starts (recon::TrainOptions::large_prune_from; scaled with the run at its default).
+  int large_prune_from = recon::TrainOptions{}.large_prune_from;
   // desplat: TrainOptions::distractor_opacity_weight (the opacity penalty of the per-view distractors).
   double distractor_opacity_weight = recon::TrainOptions{}.distractor_opacity_weight;
   int checkpoint_every = 1000;

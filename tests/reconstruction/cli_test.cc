@@ -32,11 +32,15 @@ TEST(CliTest, TrainResumeRender) {
   EXPECT_TRUE(info.get<bool>("complete"));
   EXPECT_EQ(info.get<int>("iterations"), 40);
   EXPECT_EQ(info.get<std::string>("initialization"), "colmap:120");
+  // The large-Gaussian prune's start, scaled with the run: 3000 x 40 / 30000.
+  EXPECT_EQ(info.child("effective_schedule").get<int>("large_prune_from"), 4);
   const std::string ply40 = read_file(runp + "/point_cloud.ply");
   // An existing run is not overwritten by accident.
   EXPECT_EQ(run("train --data " + data + " --iterations 40 --out " + runp), 2);
   // Resuming with a changed option is refused; --force starts over and reproduces the same model.
   EXPECT_EQ(run("train --resume --iterations 40 --seed 5 --out " + runp), 2);
+  EXPECT_EQ(run("train --resume --large-prune-from 7 --out " + runp), 2);
+  EXPECT_EQ(run("train --data " + data + " --large-prune-from -1 --out " + dir / "r1"), 2);
   ASSERT_EQ(run("train --data " + data + " --iterations 40 --checkpoint-every 20 --force --out " + runp), 0);
   EXPECT_EQ(read_file(runp + "/point_cloud.ply"), ply40);
   // Resume of a finished run is a no-op that keeps the model.
