@@ -213,6 +213,8 @@ TEST(TrainerTest, LargePruneByDistanceKeepsFarLargeGaussians) {
   ASSERT_EQ(by_extent.size(), 40u);    // both large ones pruned, as the reference does
   ASSERT_EQ(by_distance.size(), 41u);  // the far one kept
   EXPECT_NEAR(by_distance.position[40 * 3 + 2], center.z() + 30, 0.1);
+  EXPECT_EQ(parse_large_prune("camera_extent", "x"), TrainOptions::LargePrune::kCameraExtent);
+  EXPECT_THROW(parse_large_prune("sky", "--large-prune"), InputError);
 
   // A short run (scaled schedule) never resets opacity, yet prunes from its scaled
   // large_prune_from on: 300 iterations densify 5..150 every 18 and prune large ones after 30.
@@ -234,8 +236,6 @@ TEST(TrainerTest, LargePruneByDistanceKeepsFarLargeGaussians) {
   EXPECT_TRUE(near_one_kept());  // densification steps before large_prune_from do not prune it
   while (t.iteration() < 2 * e.large_prune_from) t.step();
   EXPECT_FALSE(near_one_kept());
-  EXPECT_EQ(parse_large_prune("camera_extent", "x"), TrainOptions::LargePrune::kCameraExtent);
-  EXPECT_THROW(parse_large_prune("sky", "--large-prune"), InputError);
 }
 
 TEST(TrainerTest, ResumeFromCheckpointEqualsUninterruptedRun) {
