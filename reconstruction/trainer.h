@@ -45,12 +45,6 @@ struct TrainOptions {
   double min_opacity = 0.005;         // prune below
   int max_screen_size_px = 20;        // see docs/reconstruction.md: inert as in the reference
   double max_world_size = 0.1;        // prune scale > this fraction of the extent (after large_prune_from)
-  // The large-Gaussian prune runs at densification steps after this iteration: the reference's first
-  // opacity reset (graphdeco prunes large Gaussians from its first reset on, gsplat from step >
-  // reset_every), scaled with the run like densify_from. It is its own field because short runs
-  // never reset: tied to the reset, runs under ~6000 iterations never pruned, and one SfM outlier
-  // near the rig grew into a veil in front of every view (docs/reconstruction.md).
-  int large_prune_from = 3000;
   // The length max_world_size is a fraction of. kCameraExtent: the cameras' extent (the reference's
   // getNerfppNorm radius) for every Gaussian. kDistance (default): per Gaussian, the larger of that
   // and its distance from the cameras' mean centre, so that the prune bounds a Gaussian's angular
@@ -59,6 +53,12 @@ struct TrainOptions {
   // sky and water after the first reset (docs/reconstruction.md, "Large-Gaussian prune").
   enum class LargePrune { kCameraExtent, kDistance };
   LargePrune large_prune = LargePrune::kDistance;
+  // The large-Gaussian prune runs at densification steps after this iteration: the reference's first
+  // opacity reset (graphdeco prunes large Gaussians from its first reset on, gsplat from step >
+  // reset_every), scaled with the run like densify_from. It is its own field because short runs
+  // never reset: tied to the reset, runs under ~6000 iterations never pruned, and one SfM outlier
+  // near the rig grew into a veil in front of every view (docs/reconstruction.md).
+  int large_prune_from = 3000;
   // Memory guard (docs/reliability.md, "Resources"): densification never grows the model beyond this
   // many Gaussians; when the candidates would, only those with the largest mean view-space gradient
   // (ties: lower index) are cloned or split. The trainer's peak memory is ~2.6 KiB per Gaussian at
