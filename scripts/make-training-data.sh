@@ -4,6 +4,10 @@
 # then re-weathered with WEATHERS specs each. The specs are a fixed table walked by the index k, so the
 # set is deterministic from its seeds (weather seed = 1000 * scene index + k). Existing outputs are kept
 # (the set is a cache: delete OUT to rebuild). Prints its size and time; writes OUT/manifest.json.
+# Overcast bases for the lens-drop detector: each scene's `wet` and `snowy` variants (overcast sky,
+# wet or snowy ground; the scenes' base lights are all sunny) rendered clear as <scene>_wet and
+# <scene>_snowy, then VARIANT_WEATHERS (default 6) rain or snow weathers each, <scene>_wet_wNN and
+# <scene>_snowy_wNN. They train the LED only (scripts/train-models.sh), like the photographs.
 # Crop variety for the lens-drop detector: PHOTO_WEATHERS (default 4) weathers of each photograph in
 # PHOTOS below (Debian's mate-backgrounds nature photos without its RainDrops image, and four of
 # scikit-image's sample photos), made clear datasets by `weathergs photo-scene` (synthetic depth),
@@ -18,6 +22,8 @@ PROFILE=${4:-quick}
 HERE=$(cd "$(dirname "$0")/.." && pwd)
 SCENES=(park parking_lot harbour market)
 PHOTO_WEATHERS=${PHOTO_WEATHERS:-4}
+VARIANTS=(wet snowy)
+VARIANT_WEATHERS=${VARIANT_WEATHERS:-6}
 MATE=/usr/share/backgrounds/mate/nature
 SKIMAGE=/usr/lib/python3/dist-packages/skimage/data
 PHOTOS=("$MATE/Aqua.jpg" "$MATE/Blinds.jpg" "$MATE/Dune.jpg" "$MATE/FreshFlower.jpg" "$MATE/Garden.jpg"
@@ -32,13 +38,16 @@ start=$(date +%s)
 
 # The weather table: effect mix, named intensity, style, wind, lens drops (count, radius, attach, slide).
 EFFECTS=(rain snow rain snow none rain+fog snow+fog rain snow rain snow none)
+EFFECTS_wet=(rain rain+fog rain none rain rain)      # the wet bases: rain (a clear view among them)
+EFFECTS_snowy=(snow snow+fog snow none snow snow)    # the snowy bases: snow
 INTENSITIES=(light moderate heavy violent)
 STYLES=(paper physical paper)
 DROPS=(0 20 40 80 10 60 30 0 50 15 70 25)
 
-spec_for() {  # scene_index k -> JSON on stdout
+spec_for() {  # scene_index k [effect table] -> JSON on stdout
   local si=$1 k=$2
-  local effect=${EFFECTS[$((k % ${#EFFECTS[@]}))]}
+  local -n table=${3:-EFFECTS}
+  local effect=${table[$((k % ${#table[@]}))]}
   local intensity=${INTENSITIES[$(((k + si) % 4))]}
   local style=${STYLES[$(((k + 2 * si) % 3))]}
   local drops=${DROPS[$(((k + 3 * si) % ${#DROPS[@]}))]}
@@ -61,12 +70,12 @@ spec_for() {  # scene_index k -> JSON on stdout
   echo "{\"seed\": $((1000 * si + k)), \"style\": \"$style\", \"effects\": {$fx}}"
 }
 
-weather_all() {  # clear dataset name, scene index in the table, number of weathers
-  local scene=$1 si=$2 n=$3 k name
+weather_all() {  # clear dataset name, scene index in the table, number of weathers [effect table]
+  local scene=$1 si=$2 n=$3 table=${4:-EFFECTS} k name
   for k in $(seq 0 $((n - 1))); do
     name=$(printf "%s_w%02d" "$scene" "$k")
     [ -f "$OUT/$name/dataset.json" ] && continue
-    spec_for "$si" "$k" > "$OUT/specs/$name.json"
+    spec_for "$si" "$k" "$table" > "$OUT/specs/$name.json"
     echo "== weather $name: $(cat "$OUT/specs/$name.json")"
     "$BIN" --quiet weather --in "$OUT/clear/$scene" --spec "$OUT/specs/$name.json" --out "$OUT/$name" \
       --targets --no-manifest --no-layers
@@ -81,6 +90,20 @@ for si in "${!SCENES[@]}"; do
       --no-colmap --out "$OUT/clear/$scene"
   fi
   weather_all "$scene" "$si" "$WEATHERS"
+done
+
+# The overcast bases (scene index 20 + 2 * scene + variant in the weather table: seeds of their own).
+for si in "${!SCENES[@]}"; do
+  scene=${SCENES[$si]}
+  for vi in "${!VARIANTS[@]}"; do
+    variant=${VARIANTS[$vi]}
+    if [ ! -f "$OUT/clear/${scene}_$variant/dataset.json" ]; then
+      echo "== render $scene ($variant, $PROFILE)"
+      "$BIN" --quiet generate --scene "$HERE/scenes/training/$scene.json" --weather "$variant" --profile "$PROFILE" \
+        --no-colmap --out "$OUT/clear/${scene}_$variant"
+    fi
+    weather_all "${scene}_$variant" "$((20 + 2 * si + vi))" "$VARIANT_WEATHERS" "EFFECTS_$variant"
+  done
 done
 
 # Photographs: a 16-view pan at the profile's size, then PHOTO_WEATHERS weathers (scene index 4 + i
@@ -102,7 +125,8 @@ views=$(find "$OUT" -path "$OUT/clear" -prune -o -path "*/images/*.png" -print |
 size=$(du -sm "$OUT" | cut -f1)
 cat > "$OUT/manifest.json" <<EOF
 {"format": "weathergs-training-set", "scenes": ["park", "parking_lot", "harbour", "market"], "profile": "$PROFILE",
- "weathers_per_scene": $WEATHERS, "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "datasets": $datasets, "views": $views, "size_mb": $size,
+ "weathers_per_scene": $WEATHERS, "overcast_variants": ["wet", "snowy"], "weathers_per_variant": $VARIANT_WEATHERS,
+ "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "datasets": $datasets, "views": $views, "size_mb": $size,
  "seconds_this_run": $seconds, "recipe": "scripts/make-training-data.sh"}
 EOF
 echo "training set: $datasets datasets, $views views, $size MB in $OUT ($seconds s this run)"

@@ -3,8 +3,9 @@
 # scripts/make-training-data.sh: `make models`. Held out, never trained on:
 # - LED: one whole training scene (LED_HELD_SCENE, default market): its weathers with drops calibrate
 #   the threshold and give the reported metrics, so both are measured on a scene the network never saw
-#   (the benchmark's scenes are unseen too). The photograph datasets (photo_*_wNN, crop variety) train
-#   the LED and nothing else: their particles fall on a synthetic depth.
+#   (the benchmark's scenes are unseen too); its overcast bases (<scene>_wet_wNN, <scene>_snowy_wNN)
+#   are held out with it. The photograph datasets (photo_*_wNN, crop variety: their particles fall on a
+#   synthetic depth) and the overcast bases train the LED and nothing else.
 # - AEF and selector: the last weather of each training scene (*_w11 with the default 12) and the whole
 #   market scene, so that the selector's theta and the held-out PSNRs come from a scene the networks
 #   never saw.
@@ -25,8 +26,11 @@ for d in "$DATA"/*_w[0-9][0-9]; do
   [ -f "$d/dataset.json" ] || continue
   name=$(basename "$d")
   last=$(ls -d "${d%_w*}"_w[0-9][0-9] | sort | tail -1)
-  case $name in photo_*) ;; *) [ "$d" = "$last" ] && held_last+=("$d") ;; esac
-  if [ "${name%_w[0-9][0-9]}" = "$LED_HELD_SCENE" ]; then held+=("$d"); else train+=("$d"); fi
+  case $name in photo_* | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9]) ;; *) [ "$d" = "$last" ] && held_last+=("$d") ;; esac
+  base=${name%_w[0-9][0-9]}
+  base=${base%_wet}
+  base=${base%_snowy}
+  if [ "$base" = "$LED_HELD_SCENE" ]; then held+=("$d"); else train+=("$d"); fi
 done
 if [ ${#train[@]} -eq 0 ] || [ ${#held[@]} -eq 0 ]; then echo "train-models: no training datasets in $DATA or no scene $LED_HELD_SCENE (run make training-data)" >&2; exit 2; fi
 ONLY=${ONLY:-all}
@@ -40,7 +44,7 @@ aef_train=() aef_held=()
 for d in "$DATA"/*_w[0-9][0-9] "$DATA"/clear/*; do
   [ -f "$d/dataset.json" ] || continue
   name=$(basename "$d")
-  case $name in photo_*) continue ;; esac
+  case $name in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9]) continue ;; esac  # the LED's only
   if [ "${name%_w[0-9][0-9]}" = "$AEF_HELD_SCENE" ] || [[ " ${held_last[*]} " == *" $d "* ]]; then aef_held+=("$d"); else aef_train+=("$d"); fi
 done
 
