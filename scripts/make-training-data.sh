@@ -6,7 +6,7 @@
 # (the set is a cache: delete OUT to rebuild). Prints its size and time; writes OUT/manifest.json.
 # Overcast bases for the lens-drop detector: each scene's `wet` and `snowy` variants (overcast sky,
 # wet or snowy ground; the scenes' base lights are all sunny) rendered clear as <scene>_wet and
-# <scene>_snowy, then VARIANT_WEATHERS (default 6) rain or snow weathers each, <scene>_wet_wNN and
+# <scene>_snowy, then VARIANT_WEATHERS (default 12) rain or snow weathers each, <scene>_wet_wNN and
 # <scene>_snowy_wNN. They train the LED only (scripts/train-models.sh), like the photographs.
 # Crop variety for the lens-drop detector: PHOTO_WEATHERS (default 4) weathers of each photograph in
 # PHOTOS below (Debian's mate-backgrounds nature photos without its RainDrops image, and four of
@@ -23,7 +23,7 @@ HERE=$(cd "$(dirname "$0")/.." && pwd)
 SCENES=(park parking_lot harbour market)
 PHOTO_WEATHERS=${PHOTO_WEATHERS:-4}
 VARIANTS=(wet snowy)
-VARIANT_WEATHERS=${VARIANT_WEATHERS:-6}
+VARIANT_WEATHERS=${VARIANT_WEATHERS:-12}
 MATE=/usr/share/backgrounds/mate/nature
 SKIMAGE=/usr/lib/python3/dist-packages/skimage/data
 PHOTOS=("$MATE/Aqua.jpg" "$MATE/Blinds.jpg" "$MATE/Dune.jpg" "$MATE/FreshFlower.jpg" "$MATE/Garden.jpg"
