@@ -3,9 +3,9 @@
 # scripts/make-training-data.sh: `make models`. Held out, never trained on:
 # - LED: one whole training scene (LED_HELD_SCENE, default market): its weathers with drops calibrate
 #   the threshold and give the reported metrics, so both are measured on a scene the network never saw
-#   (the benchmark's scenes are unseen too); its overcast bases (<scene>_wet_wNN, <scene>_snowy_wNN)
-#   are held out with it. The photograph datasets (photo_*_wNN, crop variety: their particles fall on a
-#   synthetic depth) and the overcast bases train the LED and nothing else.
+#   (the benchmark's scenes are unseen too); its overcast bases (<scene>_wet_wNN,
+#   <scene>_snowy_wNN) are held out with it. The photograph datasets (photo_*_wNN, crop variety:
+#   their particles fall on a synthetic depth) and the overcast bases train the LED and nothing else.
 # - AEF and selector: the last weather of each training scene (*_w11 with the default 12) and the whole
 #   market scene, so that the selector's theta and the held-out PSNRs come from a scene the networks
 #   never saw.
@@ -21,12 +21,17 @@ ITERATIONS=${4:-6000}   # the LED's iterations
 LED_WIDTH=${LED_WIDTH:-144}     # the LED's internal width (docs/restoration.md)
 LED_JITTER=${LED_JITTER:-0}     # its colour jitter (0.25 was tried: docs/restoration.md)
 LED_HELD_SCENE=${LED_HELD_SCENE:-market}
+# Datasets and clear renders that train the LED only: the photographs and the overcast bases.
+led_only() {
+  case $1 in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9]) return 0 ;; esac
+  return 1
+}
 train=() held=() held_last=()
 for d in "$DATA"/*_w[0-9][0-9]; do
   [ -f "$d/dataset.json" ] || continue
   name=$(basename "$d")
   last=$(ls -d "${d%_w*}"_w[0-9][0-9] | sort | tail -1)
-  case $name in photo_* | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9]) ;; *) [ "$d" = "$last" ] && held_last+=("$d") ;; esac
+  if ! led_only "$name" && [ "$d" = "$last" ]; then held_last+=("$d"); fi
   base=${name%_w[0-9][0-9]}
   base=${base%_wet}
   base=${base%_snowy}
@@ -44,7 +49,7 @@ aef_train=() aef_held=()
 for d in "$DATA"/*_w[0-9][0-9] "$DATA"/clear/*; do
   [ -f "$d/dataset.json" ] || continue
   name=$(basename "$d")
-  case $name in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9]) continue ;; esac  # the LED's only
+  led_only "$name" && continue
   if [ "${name%_w[0-9][0-9]}" = "$AEF_HELD_SCENE" ] || [[ " ${held_last[*]} " == *" $d "* ]]; then aef_held+=("$d"); else aef_train+=("$d"); fi
 done
 
