@@ -28,9 +28,9 @@ int run(DetectArgs& a) {
   const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
   double mean = 0;
   for (const auto& v : r.views) mean += v.mask_fraction / double(r.views.size());
-  std::printf("detected lens drops on %zu views in %.2f s (%.1f ms per view in the network), %s, threshold %.3f: "
+  std::printf("detected lens drops on %zu views in %.2f s (%.1f ms per view in the network), %s, threshold %.3f, %d dilations: "
               "%.1f%% of the pixels masked on average\nwrote %s\n",
-              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging), r.threshold,
+              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging), r.threshold, r.dilate_iterations,
               100 * mean, a.out.c_str());
   if (r.ground_truth)
     std::printf("against the dataset's masks/lens: IoU %.3f  precision %.3f  recall %.3f (drops on %.2f%% of the pixels)\n",
@@ -56,7 +56,11 @@ Command make(CLI::App& root) {
   sub->add_option("--rule", a->rule, "above: attention >= t (the paper); band: lo <= attention <= hi (the released code)")
       ->capture_default_str()->check(CLI::IsMember({"above", "band"}));
   sub->add_option("--band", a->band, "The band of --rule band")->expected(2)->capture_default_str();
-  sub->add_option("--dilate", a->options.mask.dilate_iterations, "3x3 dilations of the mask")->capture_default_str();
+  sub->add_option("--dilate", a->options.mask.dilate_iterations,
+                  "3x3 dilations of the mask (default: the weights' calibrated count; 3 with --rule band)")
+      ->check(CLI::Range(0, 50));
+  sub->add_flag("--save-attention", a->options.save_attention,
+                "Also write the soft attention behind each mask as attention/<view>.png (16-bit, value = attention)");
   return {sub, [a] { return run(*a); }};
 }
 

@@ -23,8 +23,8 @@ int run(TrainLedArgs& a) {
               r.record.loss_curve.empty() ? 0.0 : r.record.loss_curve.front(),
               r.record.loss_curve.empty() ? 0.0 : r.record.loss_curve.back());
   if (!a.held_out.empty()) {
-    std::printf("calibrated threshold %.3f: mean IoU %.3f over held-out datasets with drops\n", r.calibration.threshold,
-                r.calibration.mean_iou);
+    std::printf("calibrated threshold %.3f and %d dilations: mean IoU %.3f over held-out datasets with drops\n",
+                r.calibration.threshold, r.calibration.dilate_iterations, r.calibration.mean_iou);
     for (const auto& s : r.calibration.scores)
       std::printf("  %-32s IoU %.3f  precision %.3f  recall %.3f  (drops on %.2f%% of pixels, masked %.2f%%)\n",
                   s.dataset.c_str(), s.iou, s.precision, s.recall, 100 * s.gt_fraction, 100 * s.mask_fraction);
@@ -51,6 +51,13 @@ Command make(CLI::App& root) {
   sub->add_option("--width", t.arch.width, "Internal width in pixels")->capture_default_str();
   sub->add_option("--channels", t.arch.channels, "Feature channels")->capture_default_str();
   sub->add_option("--steps", t.arch.steps, "Recurrent steps")->capture_default_str();
+  CLI::Option* dilate = sub->add_option("--dilate", a->options.mask.dilate_iterations,
+                                        "3x3 dilations the threshold is calibrated for and stored with (default 3, the released code's)")
+                            ->check(CLI::Range(0, 50));
+  sub->add_flag("--calibrate-dilation", a->options.calibrate_dilations,
+                "Choose the dilations (0..3) with the threshold for the held-out mask IoU (higher IoU, worse reconstructions: "
+                "docs/restoration.md)")
+      ->excludes(dilate);
   sub->add_option("--colour-jitter", t.colour_jitter, "Photometric augmentation: channel and overall gains in [1-j, 1+j] (0 = off)")
       ->capture_default_str();
   return {sub, [a, sub] {

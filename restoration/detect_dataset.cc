@@ -24,20 +24,26 @@ void LedMaskOptions::validate() const {
     throw InputError("LED threshold", "expected in (0, 1), got " + std::to_string(*threshold));
   if (!(band_lo >= 0 && band_lo < band_hi && band_hi <= 1))
     throw InputError("LED band", "expected 0 <= lo < hi <= 1, got [" + std::to_string(band_lo) + ", " + std::to_string(band_hi) + "]");
-  if (dilate_iterations < 0 || dilate_iterations > 50)
-    throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(dilate_iterations));
+  if (dilate_iterations && (*dilate_iterations < 0 || *dilate_iterations > 50))
+    throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(*dilate_iterations));
 }
 
-Image attention_to_mask(const Image& attention, double t, const LedMaskOptions& o) {
+int LedMaskOptions::resolved_dilations(const LensDetector& led) const {
+  if (dilate_iterations) return *dilate_iterations;
+  return rule == LedThresholdRule::kBand ? kReleasedCodeDilations : led.dilate_iterations();
+}
+
+Image attention_to_mask(const Image& attention, double t, int dilations, const LedMaskOptions& o) {
+  if (dilations < 0 || dilations > 50) throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(dilations));
   Image m(attention.width, attention.height, 1, ColorSpace::kLinear);
   for (size_t i = 0; i < m.data.size(); ++i) {
     const float a = attention.data[i];
     const bool on = o.rule == LedThresholdRule::kBand ? (a >= o.band_lo && a <= o.band_hi) : a >= t;
     m.data[i] = on ? 1.f : 0.f;
   }
-  if (o.dilate_iterations > 0) {
+  if (dilations > 0) {
     cv::Mat mat(m.height, m.width, CV_32FC1, m.data.data());
-    cv::dilate(mat, mat, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)), cv::Point(-1, -1), o.dilate_iterations);
+    cv::dilate(mat, mat, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)), cv::Point(-1, -1), dilations);
   }
   return m;
 }
@@ -103,6 +109,7 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   const Dataset ds = read_dataset(dataset);
   const LensDetector led = LensDetector::load(o.weights);
   const double t = o.mask.threshold.value_or(led.threshold());
+  const int dilations = o.mask.resolved_dilations(led);
   auto input_path = [&](const std::string& view) {
     return o.images_dir.empty() ? ds.path(ImageKind::kImages, view) : (fs::path(o.images_dir) / (view + layout::kImageExt)).string();
   };
@@ -133,9 +140,11 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   }
   DetectDatasetReport report;
   report.threshold = t;
+  report.dilate_iterations = dilations;
   report.seconds_per_view = seconds_since(net_start) / double(std::max<size_t>(1, images.size()));
   const Image averaged = o.averaging == LedAveraging::kTrainViews ? average(attention) : Image();
   AtomicDirectory dir(out);
+  if (o.save_attention) fs::create_directories(fs::path(dir.path()) / kDetectAttentionDir);
   Json views = Json::array();
   std::vector<Image> scored_masks, scored_truth;  // ground truth: the averaged (or every) view
   const std::set<std::string> averaged_set(names.begin(), names.end());
@@ -146,11 +155,17 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
     if (own) ++k;
     if (a.width != c.width || a.height != c.height)
       throw InputError(input_path(c.name), "differs in size from the training views; kTrainViews averaging needs one size");
-    const Image mask = attention_to_mask(a, t, o.mask);
+    const Image mask = attention_to_mask(a, t, dilations, o.mask);
     double frac = 0, mean = 0;
     for (size_t i = 0; i < mask.data.size(); ++i) frac += mask.data[i], mean += a.data[i];
     DetectViewReport v{c.name, frac / double(mask.data.size()), mean / double(mask.data.size())};
     write_mask((fs::path(dir.path()) / (c.name + layout::kImageExt)).string(), mask);
+    if (o.save_attention) {
+      Image soft = a;
+      soft.space = ColorSpace::kSRGB;  // written as is: the PNG value is the attention
+      write_image((fs::path(dir.path()) / kDetectAttentionDir / (c.name + layout::kImageExt)).string(), soft,
+                  {PixelFormat::kUInt16, {}});
+    }
     if (ds.has(ImageKind::kLensMask) && averaged_set.count(c.name) && fs::exists(ds.path(ImageKind::kLensMask, c.name))) {
       scored_truth.push_back(read_mask(ds.path(ImageKind::kLensMask, c.name)));
       scored_masks.push_back(mask);
@@ -177,7 +192,8 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
                {"rule", to_string(o.mask.rule)},
                {"threshold", o.mask.rule == LedThresholdRule::kAbove ? Json(t) : Json()},
                {"band", o.mask.rule == LedThresholdRule::kBand ? Json{o.mask.band_lo, o.mask.band_hi} : Json()},
-               {"dilate_iterations", o.mask.dilate_iterations},
+               {"dilate_iterations", dilations},
+               {"attention", o.save_attention ? Json(kDetectAttentionDir) : Json()},
                {"ground_truth", gt_json},
                {"seconds", report.seconds},
                {"seconds_per_view", report.seconds_per_view},

@@ -12,6 +12,9 @@
 namespace weathergs::restoration {
 
 inline constexpr const char* kDetectReportFile = "detect.json";  // written last: the output is complete
+// With save_attention: the soft attention each mask was thresholded from, <out>/attention/<view>.png
+// (16-bit, value = attention in [0, 1]), for choosing a threshold without rerunning the network.
+inline constexpr const char* kDetectAttentionDir = "attention";
 // The weights shipped with the repository (models/README.md), relative to the source tree.
 inline constexpr const char* kDefaultLedWeights = "models/led/led";
 
@@ -26,16 +29,23 @@ const char* to_string(LedAveraging a);
 enum class LedThresholdRule { kAbove, kBand };
 const char* to_string(LedThresholdRule r);
 
+// The released code's 3x3 dilations (three), the default of the band preset and of weights calibrated
+// before the dilation count was (their JSON lacks `dilate_iterations`).
+inline constexpr int kReleasedCodeDilations = 3;
+
 struct LedMaskOptions {
   LedThresholdRule rule = LedThresholdRule::kAbove;
   std::optional<double> threshold;   // kAbove; default: the weights' calibrated threshold
   double band_lo = 0.5, band_hi = 0.7;  // kBand
-  int dilate_iterations = 3;         // 3x3 dilation, as the released code
+  // 3x3 dilations of the thresholded mask. Default: the weights' calibrated count with kAbove (chosen
+  // with t on held-out views), kReleasedCodeDilations with kBand (the released code's preset).
+  std::optional<int> dilate_iterations;
   void validate() const;
+  int resolved_dilations(const LensDetector& led) const;
 };
 
-// Attention -> {0, 1} mask with `t` (resolved threshold) and the rule, then dilated.
-Image attention_to_mask(const Image& attention, double t, const LedMaskOptions& options);
+// Attention -> {0, 1} mask with `t` (resolved threshold) and the rule, then `dilations` 3x3 dilations.
+Image attention_to_mask(const Image& attention, double t, int dilations, const LedMaskOptions& options);
 
 // A predicted mask against ground-truth lens masks, pixel counts summed over the views (one IoU for
 // the set). A set without drops and without a prediction scores IoU 1.
@@ -52,6 +62,7 @@ struct DetectDatasetOptions {
   LedAveraging averaging = LedAveraging::kTrainViews;
   LedMaskOptions mask;
   int batch = 1;           // views per network call (batches of 4 measured slower per view)
+  bool save_attention = false;  // also write <out>/attention/<view>.png (kDetectAttentionDir)
 };
 
 struct DetectViewReport {
@@ -62,6 +73,7 @@ struct DetectViewReport {
 struct DetectDatasetReport {
   std::vector<DetectViewReport> views;  // dataset order
   double threshold = 0;
+  int dilate_iterations = 0;            // resolved
   double seconds = 0;
   double seconds_per_view = 0;          // network time only
   std::optional<LedScore> ground_truth; // when the dataset has masks/lens: over the averaged views

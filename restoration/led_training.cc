@@ -39,7 +39,8 @@ std::vector<LedExample> read_led_examples(const std::string& dataset) {
   return out;
 }
 
-LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mo) {
+LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mo,
+                             bool search_dilations) {
   if (held_out.empty()) throw InputError("LED calibration", "needs at least one held-out dataset");
   // The mean attention is computed once per dataset; only the threshold varies.
   struct Cached {
@@ -61,19 +62,24 @@ LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::str
     c.attention = mean_attention(led, views, d);
     cache.push_back(std::move(c));
   }
-  auto score = [&](const Cached& c, double t) { return score_lens_masks(c.name, {attention_to_mask(c.attention, t, mo)}, c.gts); };
+  auto score = [&](const Cached& c, double t, int dilations) {
+    return score_lens_masks(c.name, {attention_to_mask(c.attention, t, dilations, mo)}, c.gts);
+  };
   LedCalibration best;
   best.mean_iou = -1;
-  for (int k = 0; k <= 36; ++k) {
-    const double t = 0.05 + 0.025 * k;
-    double sum = 0;
-    int n = 0;
-    for (const Cached& c : cache)
-      if (c.has_drops) sum += score(c, t).iou, ++n;
-    const double mean = n > 0 ? sum / n : 0;
-    if (mean > best.mean_iou + 1e-12) best.mean_iou = mean, best.threshold = t;
-  }
-  for (const Cached& c : cache) best.scores.push_back(score(c, best.threshold));
+  const int fixed = mo.dilate_iterations.value_or(kReleasedCodeDilations);
+  const int lo = search_dilations ? 0 : fixed, hi = search_dilations ? kMaxCalibratedDilations : fixed;
+  for (int dilations = lo; dilations <= hi; ++dilations)
+    for (int k = 0; k <= 36; ++k) {
+      const double t = 0.05 + 0.025 * k;
+      double sum = 0;
+      int n = 0;
+      for (const Cached& c : cache)
+        if (c.has_drops) sum += score(c, t, dilations).iou, ++n;
+      const double mean = n > 0 ? sum / n : 0;
+      if (mean > best.mean_iou + 1e-12) best.mean_iou = mean, best.threshold = t, best.dilate_iterations = dilations;
+    }
+  for (const Cached& c : cache) best.scores.push_back(score(c, best.threshold, best.dilate_iterations));
   return best;
 }
 
@@ -94,8 +100,9 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
   result.record = led.train(examples, o.train);
   examples.clear();
   if (!held_out.empty()) {
-    result.calibration = calibrate_led(led, held_out, o.mask);
+    result.calibration = calibrate_led(led, held_out, o.mask, o.calibrate_dilations);
     led.set_threshold(result.calibration.threshold);
+    led.set_dilate_iterations(result.calibration.dilate_iterations);
   }
   Json scores = Json::array();
   for (const LedScore& s : result.calibration.scores)
@@ -121,8 +128,9 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
         {"loss_per_50_iterations", result.record.loss_curve}}},
       {"calibration",
        {{"held_out", held},
-        {"grid", "0.05..0.95 step 0.025, maximizing the mean IoU of the averaged mask over held-out datasets with drops"},
-        {"dilate_iterations", o.mask.dilate_iterations},
+        {"grid", o.calibrate_dilations ? "0.05..0.95 step 0.025 x 0..3 dilations, maximizing the mean IoU of the averaged mask over held-out datasets with drops"
+                                       : "0.05..0.95 step 0.025, maximizing the mean IoU of the averaged mask over held-out datasets with drops"},
+        {"dilate_iterations", result.calibration.dilate_iterations},
         {"threshold", result.calibration.threshold},
         {"mean_iou", result.calibration.mean_iou},
         {"scores", scores}}}};

@@ -16,17 +16,27 @@ std::vector<LedExample> read_led_examples(const std::string& dataset);
 
 struct LedCalibration {
   double threshold = 0.5;
+  int dilate_iterations = kReleasedCodeDilations;
   double mean_iou = 0;                  // over the held-out datasets with drops
-  std::vector<LedScore> scores;         // at the chosen threshold
+  std::vector<LedScore> scores;         // at the chosen threshold and dilations
 };
+// The dilation counts a calibration with search_dilations tries: none up to the released code's three.
+inline constexpr int kMaxCalibratedDilations = kReleasedCodeDilations;
 // Picks t on a grid 0.05..0.95 (step 0.025) maximizing the mean IoU over held-out datasets that have
 // drops (datasets without drops only enter through precision: a false mask there lowers nothing in
-// IoU, so they are reported, not optimized).
-LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mask_options);
+// IoU, so they are reported, not optimized), for mask_options' dilation count (default the released
+// code's 3), or with search_dilations over 0..3 dilations too. Ties go to fewer dilations, then to the
+// smaller t.
+LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mask_options,
+                             bool search_dilations = false);
 
 struct TrainLedOptions {
   LedTrainOptions train;
-  LedMaskOptions mask;  // the post-processing the calibration assumes (threshold is ignored)
+  LedMaskOptions mask;  // the post-processing the calibration assumes (threshold is ignored; dilations
+                        // default to the released code's 3)
+  // Also choose the dilation count (0..3) on the held-out views. Off by default: the IoU-best count
+  // (none) gave a higher mask IoU but worse WeatherGS reconstructions (docs/restoration.md).
+  bool calibrate_dilations = false;
   std::string command;  // the command line, recorded in the manifest
 };
 struct TrainLedResult {

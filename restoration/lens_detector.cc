@@ -192,6 +192,7 @@ struct LensDetector::Impl {
   LedArchitecture arch;
   LedNet net{nullptr};
   double threshold = 0.5;
+  int dilate_iterations = 3;
   Json metadata = Json::object();
 };
 
@@ -214,6 +215,11 @@ void LensDetector::set_threshold(double t) {
   if (!(t > 0 && t < 1)) throw InputError("LED threshold", "expected in (0, 1), got " + std::to_string(t));
   impl_->threshold = t;
 }
+int LensDetector::dilate_iterations() const { return impl_->dilate_iterations; }
+void LensDetector::set_dilate_iterations(int n) {
+  if (n < 0 || n > 50) throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(n));
+  impl_->dilate_iterations = n;
+}
 const Json& LensDetector::metadata() const { return impl_->metadata; }
 
 int64_t LensDetector::parameter_count() const {
@@ -226,6 +232,7 @@ void LensDetector::save(const std::string& stem, const Json& extra) const {
   j["version"] = kLedFormatVersion;
   j["architecture"] = impl_->arch.to_json();
   j["threshold"] = impl_->threshold;
+  j["dilate_iterations"] = impl_->dilate_iterations;
   j["parameters"] = parameter_count();
   detail::save_weights(*impl_->net, stem, j);  // + the tensor table, the blob and its sha256
 }
@@ -236,6 +243,7 @@ LensDetector LensDetector::load(const std::string& stem) {
   LensDetector d(arch, 0);
   detail::load_weights(*d.impl_->net, r, stem);
   d.impl_->threshold = r.get_number("threshold", 1e-6, 1 - 1e-6);
+  d.impl_->dilate_iterations = int(r.get_number_or("dilate_iterations", 3, 0, 50));
   d.impl_->metadata = r.value();
   return d;
 }

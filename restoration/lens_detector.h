@@ -78,6 +78,10 @@ class LensDetector {
   // The calibrated threshold stored with the weights (0.5 until calibrated).
   double threshold() const;
   void set_threshold(double t);
+  // The calibrated number of 3x3 dilations after the threshold (3, the released code's, for weights
+  // saved before it was calibrated).
+  int dilate_iterations() const;
+  void set_dilate_iterations(int n);
   const Json& metadata() const;  // the JSON read by load (empty for a fresh network)
 
   // Trains in place on `examples` (resized to the internal width once, up front). Deterministic for a

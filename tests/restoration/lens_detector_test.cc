@@ -136,9 +136,18 @@ TEST(LensDetectorTest, SaveLoadRoundTripAndThreadCountInvariance) {
   testing::TempDir tmp;
   LensDetector led(LedArchitecture{}, 4);
   led.set_threshold(0.42);
+  led.set_dilate_iterations(1);
+  EXPECT_THROW(led.set_dilate_iterations(-1), InputError);
   led.save(tmp / "w", Json{{"note", "test"}});
   const LensDetector back = LensDetector::load(tmp / "w");
   EXPECT_DOUBLE_EQ(back.threshold(), 0.42);
+  EXPECT_EQ(back.dilate_iterations(), 1);
+  {  // Weights saved before the dilation count was calibrated: the released code's 3.
+    Json j = read_json_file(tmp / "w.json");
+    j.erase("dilate_iterations");
+    write_file_atomic(tmp / "w.json", j.dump());
+    EXPECT_EQ(LensDetector::load(tmp / "w").dilate_iterations(), kReleasedCodeDilations);
+  }
   EXPECT_EQ(back.metadata().at("note"), "test");
   const LedExample e = toy_example(120, 80, 6, 0, true);
   const int before = num_threads();
@@ -205,18 +214,16 @@ TEST(LensDetectorTest, MaskPostProcessing) {
   att.at(4, 4) = 0.6f;
   att.at(0, 0) = 0.9f;
   LedMaskOptions o;
-  o.dilate_iterations = 0;
-  Image m = attention_to_mask(att, 0.5, o);
+  Image m = attention_to_mask(att, 0.5, 0, o);
   EXPECT_EQ(m.at(4, 4), 1.f);
   EXPECT_EQ(m.at(0, 0), 1.f);
   EXPECT_EQ(m.at(3, 3), 0.f);
   o.rule = LedThresholdRule::kBand;  // the released code's [0.5, 0.7]: 0.9 is outside the band
-  m = attention_to_mask(att, 0.5, o);
+  m = attention_to_mask(att, 0.5, 0, o);
   EXPECT_EQ(m.at(4, 4), 1.f);
   EXPECT_EQ(m.at(0, 0), 0.f);
   o.rule = LedThresholdRule::kAbove;
-  o.dilate_iterations = 3;  // 3x3 three times: a 7x7 square around the centre pixel
-  m = attention_to_mask(att, 0.5, o);
+  m = attention_to_mask(att, 0.5, 3, o);  // 3x3 three times: a 7x7 square around the centre pixel
   double sum = 0;
   for (int y = 1; y <= 7; ++y)
     for (int x = 1; x <= 7; ++x) sum += m.at(x, y);
@@ -262,6 +269,24 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
   EXPECT_EQ(w.at("calibration").at("held_out").size(), 1u);
   EXPECT_NE(w.at("command").get<std::string>().find("--iterations 200"), std::string::npos);
   EXPECT_GT(w.at("calibration").at("mean_iou").get<double>(), 0.5) << read_file(tmp / "t.log");
+  // The threshold is calibrated for the released code's 3 dilations, stored with the weights.
+  const int dilations = w.at("dilate_iterations").get<int>();
+  EXPECT_EQ(dilations, kReleasedCodeDilations);
+  EXPECT_EQ(w.at("calibration").at("dilate_iterations").get<int>(), dilations);
+  {  // Searching the dilations too (0..3, a superset of the fixed 3) never calibrates to a lower IoU.
+    const LensDetector led = LensDetector::load(tmp / "w");
+    const LedCalibration fixed = calibrate_led(led, {tmp / "held"}, LedMaskOptions{});
+    const LedCalibration searched = calibrate_led(led, {tmp / "held"}, LedMaskOptions{}, true);
+    EXPECT_NEAR(fixed.mean_iou, w.at("calibration").at("mean_iou").get<double>(), 1e-9);
+    EXPECT_DOUBLE_EQ(fixed.threshold, led.threshold());
+    EXPECT_GE(searched.mean_iou, fixed.mean_iou);
+    EXPECT_GE(searched.dilate_iterations, 0);
+    EXPECT_LE(searched.dilate_iterations, kMaxCalibratedDilations);
+  }
+  // A fixed count and its search exclude each other: a usage error, nothing trained.
+  EXPECT_EQ(run_cli("train-led --data " + (tmp / "train") + " --out " + (tmp / "x") + " --dilate 2 --calibrate-dilation",
+                    tmp / "x.log"), 2) << read_file(tmp / "x.log");
+  EXPECT_FALSE(fs::exists(tmp / "x.json"));
   // Averaged over the training views: one mask, written for every view.
   ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "m"), tmp / "d.log"), 0)
       << read_file(tmp / "d.log");
@@ -275,6 +300,21 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
   // The dataset has masks/lens: the averaged mask is scored against them (train views).
   EXPECT_EQ(r.at("ground_truth").at("views"), ds.split("train").size());
   EXPECT_GT(r.at("ground_truth").at("iou").get<double>(), 0.5);
+  EXPECT_EQ(r.at("dilate_iterations").get<int>(), dilations);  // the weights' count by default
+  // --dilate overrides it, the band preset takes the released code's 3; --save-attention writes the
+  // soft map each mask came from (16-bit).
+  ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "d5") +
+                        " --dilate 5 --save-attention", tmp / "d5.log"), 0) << read_file(tmp / "d5.log");
+  EXPECT_EQ(read_json_file(tmp / "d5/detect.json").at("dilate_iterations").get<int>(), 5);
+  for (const Camera& c : ds.cameras) {
+    const Image soft = read_image(tmp / ("d5/attention/" + c.name + ".png"));
+    EXPECT_EQ(soft.width, c.width);
+    EXPECT_EQ(soft.channels, 1);
+  }
+  ASSERT_EQ(run_cli("detect --rule band --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "band"),
+                    tmp / "band.log"), 0) << read_file(tmp / "band.log");
+  EXPECT_EQ(read_json_file(tmp / "band/detect.json").at("dilate_iterations").get<int>(), kReleasedCodeDilations);
+  EXPECT_FALSE(fs::exists(tmp / "m/attention"));
   // Per view: each view its own mask; with 1 and 2 threads the same bytes.
   ASSERT_EQ(run_cli("--threads 1 detect --per-view --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p1"), tmp / "p1.log"), 0);
   ASSERT_EQ(run_cli("--threads 2 detect --per-view --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p2"), tmp / "p2.log"), 0);
