@@ -23,7 +23,7 @@ inline constexpr int kLedFormatVersion = 1;
 
 struct LedArchitecture {
   int steps = 4;           // recurrent steps (the paper's N)
-  int width = 144;         // internal width in pixels; the height follows the view's aspect ratio
+  int width = 216;         // internal width in pixels (144 before 2026-11-26); the height follows the view's aspect ratio
   int channels = 16;       // feature channels after the strided conv (and of the ConvLSTM state)
   int residual_blocks = 3; // dilations 1, 2, 4, ... (the receptive field must cover a defocused drop)
   void validate() const;   // InputError naming the field
