@@ -29,16 +29,12 @@ const char* to_string(LedAveraging a);
 enum class LedThresholdRule { kAbove, kBand };
 const char* to_string(LedThresholdRule r);
 
-// The released code's 3x3 dilations (three), the default of the band preset and of weights calibrated
-// before the dilation count was (their JSON lacks `dilate_iterations`).
-inline constexpr int kReleasedCodeDilations = 3;
-
 struct LedMaskOptions {
   LedThresholdRule rule = LedThresholdRule::kAbove;
   std::optional<double> threshold;   // kAbove; default: the weights' calibrated threshold
   double band_lo = 0.5, band_hi = 0.7;  // kBand
-  // 3x3 dilations of the thresholded mask. Default: the weights' calibrated count with kAbove (chosen
-  // with t on held-out views), kReleasedCodeDilations with kBand (the released code's preset).
+  // 3x3 dilations of the thresholded mask. Default: the weights' count (the one their t was calibrated
+  // for) with kAbove, kReleasedCodeDilations with kBand (the released code's preset).
   std::optional<int> dilate_iterations;
   void validate() const;
   int resolved_dilations(const LensDetector& led) const;

@@ -192,7 +192,7 @@ struct LensDetector::Impl {
   LedArchitecture arch;
   LedNet net{nullptr};
   double threshold = 0.5;
-  int dilate_iterations = 3;
+  int dilate_iterations = kReleasedCodeDilations;
   Json metadata = Json::object();
 };
 
@@ -243,7 +243,7 @@ LensDetector LensDetector::load(const std::string& stem) {
   LensDetector d(arch, 0);
   detail::load_weights(*d.impl_->net, r, stem);
   d.impl_->threshold = r.get_number("threshold", 1e-6, 1 - 1e-6);
-  d.impl_->dilate_iterations = int(r.get_number_or("dilate_iterations", 3, 0, 50));
+  d.impl_->dilate_iterations = int(r.get_number_or("dilate_iterations", kReleasedCodeDilations, 0, 50));
   d.impl_->metadata = r.value();
   return d;
 }

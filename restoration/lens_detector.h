@@ -20,10 +20,13 @@ namespace weathergs::restoration {
 
 inline constexpr const char* kLedFormat = "weathergs-led";
 inline constexpr int kLedFormatVersion = 1;
+// The released code's 3x3 dilations of the LED mask (three): the default count a threshold is
+// calibrated for, the band preset's, and the one of weights saved before the count was stored.
+inline constexpr int kReleasedCodeDilations = 3;
 
 struct LedArchitecture {
   int steps = 4;           // recurrent steps (the paper's N)
-  int width = 216;         // internal width in pixels (144 before 2026-11-26); the height follows the view's aspect ratio
+  int width = 216;         // internal width in pixels (144 until 2026-11-26); the height keeps the aspect ratio
   int channels = 16;       // feature channels after the strided conv (and of the ConvLSTM state)
   int residual_blocks = 3; // dilations 1, 2, 4, ... (the receptive field must cover a defocused drop)
   void validate() const;   // InputError naming the field
@@ -78,8 +81,8 @@ class LensDetector {
   // The calibrated threshold stored with the weights (0.5 until calibrated).
   double threshold() const;
   void set_threshold(double t);
-  // The calibrated number of 3x3 dilations after the threshold (3, the released code's, for weights
-  // saved before it was calibrated).
+  // The number of 3x3 dilations after the threshold that the threshold was calibrated for
+  // (kReleasedCodeDilations for weights saved before the count was stored).
   int dilate_iterations() const;
   void set_dilate_iterations(int n);
   const Json& metadata() const;  // the JSON read by load (empty for a fresh network)
