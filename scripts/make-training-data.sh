@@ -125,7 +125,7 @@ views=$(find "$OUT" -path "$OUT/clear" -prune -o -path "*/images/*.png" -print |
 size=$(du -sm "$OUT" | cut -f1)
 cat > "$OUT/manifest.json" <<EOF
 {"format": "weathergs-training-set", "scenes": ["park", "parking_lot", "harbour", "market"], "profile": "$PROFILE",
- "weathers_per_scene": $WEATHERS, "overcast_variants": ["wet", "snowy"], "weathers_per_variant": $VARIANT_WEATHERS,
+ "weathers_per_scene": $WEATHERS, "overcast_variants": [$(printf '"%s", ' "${VARIANTS[@]}" | sed 's/, $//')], "weathers_per_variant": $VARIANT_WEATHERS,
  "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "datasets": $datasets, "views": $views, "size_mb": $size,
  "seconds_this_run": $seconds, "recipe": "scripts/make-training-data.sh"}
 EOF
