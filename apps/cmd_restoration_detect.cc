@@ -58,7 +58,7 @@ Command make(CLI::App& root) {
   sub->add_option("--band", a->band, "The band of --rule band")->expected(2)->capture_default_str();
   sub->add_option("--dilate", a->options.mask.dilate_iterations,
                   "3x3 dilations of the mask (default: the weights' calibrated count; 3 with --rule band)")
-      ->check(CLI::Range(0, 50));
+      ->check(CLI::Range(0, restoration::kMaxDilations));
   sub->add_flag("--save-attention", a->options.save_attention,
                 "Also write the soft attention behind each mask as attention/<view>.png (16-bit, value = attention)");
   return {sub, [a] { return run(*a); }};

@@ -53,7 +53,7 @@ Command make(CLI::App& root) {
   sub->add_option("--steps", t.arch.steps, "Recurrent steps")->capture_default_str();
   CLI::Option* dilate = sub->add_option("--dilate", a->options.mask.dilate_iterations,
                                         "3x3 dilations the threshold is calibrated for and stored with (default 3, the released code's)")
-                            ->check(CLI::Range(0, 50));
+                            ->check(CLI::Range(0, restoration::kMaxDilations));
   sub->add_flag("--calibrate-dilation", a->options.calibrate_dilations,
                 "Choose the dilations (0..3) with the threshold for the held-out mask IoU (higher IoU, worse reconstructions: "
                 "docs/restoration.md)")

@@ -24,8 +24,7 @@ void LedMaskOptions::validate() const {
     throw InputError("LED threshold", "expected in (0, 1), got " + std::to_string(*threshold));
   if (!(band_lo >= 0 && band_lo < band_hi && band_hi <= 1))
     throw InputError("LED band", "expected 0 <= lo < hi <= 1, got [" + std::to_string(band_lo) + ", " + std::to_string(band_hi) + "]");
-  if (dilate_iterations && (*dilate_iterations < 0 || *dilate_iterations > 50))
-    throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(*dilate_iterations));
+  if (dilate_iterations) checked_dilations(*dilate_iterations);
 }
 
 int LedMaskOptions::resolved_dilations(const LensDetector& led) const {
@@ -34,7 +33,7 @@ int LedMaskOptions::resolved_dilations(const LensDetector& led) const {
 }
 
 Image attention_to_mask(const Image& attention, double t, int dilations, const LedMaskOptions& o) {
-  if (dilations < 0 || dilations > 50) throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(dilations));
+  checked_dilations(dilations);
   Image m(attention.width, attention.height, 1, ColorSpace::kLinear);
   for (size_t i = 0; i < m.data.size(); ++i) {
     const float a = attention.data[i];

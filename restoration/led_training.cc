@@ -128,8 +128,9 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
         {"loss_per_50_iterations", result.record.loss_curve}}},
       {"calibration",
        {{"held_out", held},
-        {"grid", o.calibrate_dilations ? "0.05..0.95 step 0.025 x 0..3 dilations, maximizing the mean IoU of the averaged mask over held-out datasets with drops"
-                                       : "0.05..0.95 step 0.025, maximizing the mean IoU of the averaged mask over held-out datasets with drops"},
+        {"grid", std::string("0.05..0.95 step 0.025") +
+                     (o.calibrate_dilations ? " x 0.." + std::to_string(kMaxCalibratedDilations) + " dilations" : "") +
+                     ", maximizing the mean IoU of the averaged mask over held-out datasets with drops"},
         {"dilate_iterations", result.calibration.dilate_iterations},
         {"threshold", result.calibration.threshold},
         {"mean_iou", result.calibration.mean_iou},

@@ -215,11 +215,13 @@ void LensDetector::set_threshold(double t) {
   if (!(t > 0 && t < 1)) throw InputError("LED threshold", "expected in (0, 1), got " + std::to_string(t));
   impl_->threshold = t;
 }
-int LensDetector::dilate_iterations() const { return impl_->dilate_iterations; }
-void LensDetector::set_dilate_iterations(int n) {
-  if (n < 0 || n > 50) throw InputError("LED dilate_iterations", "expected 0..50, got " + std::to_string(n));
-  impl_->dilate_iterations = n;
+int checked_dilations(int n) {
+  if (n < 0 || n > kMaxDilations)
+    throw InputError("LED dilate_iterations", "expected 0.." + std::to_string(kMaxDilations) + ", got " + std::to_string(n));
+  return n;
 }
+int LensDetector::dilate_iterations() const { return impl_->dilate_iterations; }
+void LensDetector::set_dilate_iterations(int n) { impl_->dilate_iterations = checked_dilations(n); }
 const Json& LensDetector::metadata() const { return impl_->metadata; }
 
 int64_t LensDetector::parameter_count() const {
@@ -243,7 +245,7 @@ LensDetector LensDetector::load(const std::string& stem) {
   LensDetector d(arch, 0);
   detail::load_weights(*d.impl_->net, r, stem);
   d.impl_->threshold = r.get_number("threshold", 1e-6, 1 - 1e-6);
-  d.impl_->dilate_iterations = int(r.get_number_or("dilate_iterations", kReleasedCodeDilations, 0, 50));
+  d.impl_->dilate_iterations = int(r.get_number_or("dilate_iterations", kReleasedCodeDilations, 0, kMaxDilations));
   d.impl_->metadata = r.value();
   return d;
 }

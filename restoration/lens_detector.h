@@ -23,6 +23,10 @@ inline constexpr int kLedFormatVersion = 1;
 // The released code's 3x3 dilations of the LED mask (three): the default count a threshold is
 // calibrated for, the band preset's, and the one of weights saved before the count was stored.
 inline constexpr int kReleasedCodeDilations = 3;
+// The most 3x3 dilations any option or weights file may ask for (a 101-pixel square per drop pixel).
+inline constexpr int kMaxDilations = 50;
+// n when 0 <= n <= kMaxDilations, else an InputError naming the LED's dilate_iterations.
+int checked_dilations(int n);
 
 struct LedArchitecture {
   int steps = 4;           // recurrent steps (the paper's N)
