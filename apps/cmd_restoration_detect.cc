@@ -1,5 +1,6 @@
 // `weathergs detect`: the learned Lens Effect Detector over a dataset (docs/restoration.md).
 #include <cstdio>
+#include <fmt/format.h>
 #include <memory>
 
 #include "apps/command.h"
@@ -10,10 +11,11 @@ namespace weathergs::cli {
 namespace {
 
 struct DetectArgs {
-  std::string data, out, images, weights, rule = "above";
+  std::string data, out, images, weights, rule;
   double threshold = 0;
   bool per_view = false;
   std::vector<double> band{0.5, 0.7};
+  std::vector<double> peak;
   restoration::DetectDatasetOptions options;
 };
 
@@ -21,17 +23,26 @@ int run(DetectArgs& a) {
   a.options.weights = find_led_weights(a.weights);
   a.options.images_dir = a.images;
   a.options.averaging = a.per_view ? restoration::LedAveraging::kPerView : restoration::LedAveraging::kTrainViews;
-  a.options.mask.rule = a.rule == "band" ? restoration::LedThresholdRule::kBand : restoration::LedThresholdRule::kAbove;
+  if (a.rule == "band") a.options.mask.rule = restoration::LedThresholdRule::kBand;
+  if (a.rule == "above" || (a.rule.empty() && a.threshold > 0)) a.options.mask.rule = restoration::LedThresholdRule::kAbove;
+  if (a.rule == "peak" || (a.rule.empty() && !a.peak.empty())) a.options.mask.rule = restoration::LedThresholdRule::kPeak;
   if (a.threshold > 0) a.options.mask.threshold = a.threshold;
+  if (!a.peak.empty()) a.options.mask.peak = restoration::LedPeakRule{a.peak[0], a.peak[1], a.peak[2]};
   a.options.mask.band_lo = a.band[0];
   a.options.mask.band_hi = a.band[1];
   const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
   double mean = 0;
   for (const auto& v : r.views) mean += v.mask_fraction / double(r.views.size());
-  std::printf("detected lens drops on %zu views in %.2f s (%.1f ms per view in the network), %s, threshold %.3f, %d dilations: "
+  const restoration::LedMaskOptions& m = r.mask;
+  std::string rule = std::string("rule ") + restoration::to_string(*m.rule);
+  if (*m.rule == restoration::LedThresholdRule::kAbove) rule += " t " + fmt::format("{:.3f}", *m.threshold);
+  if (*m.rule == restoration::LedThresholdRule::kBand) rule += " [" + fmt::format("{:.3f}", m.band_lo) + ", " + fmt::format("{:.3f}", m.band_hi) + "]";
+  if (*m.rule == restoration::LedThresholdRule::kPeak)
+    rule += " (low " + fmt::format("{:.3f}", m.peak->low) + ", seed " + fmt::format("{:.3f}", m.peak->seed) + ", fraction " + fmt::format("{:.3f}", m.peak->fraction) + ")";
+  std::printf("detected lens drops on %zu views in %.2f s (%.1f ms per view in the network), %s, %s, %d dilations: "
               "%.1f%% of the pixels masked on average\nwrote %s\n",
-              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging), r.threshold, r.dilate_iterations,
-              100 * mean, a.out.c_str());
+              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging), rule.c_str(),
+              *m.dilate_iterations, 100 * mean, a.out.c_str());
   if (r.ground_truth)
     std::printf("against the dataset's masks/lens: IoU %.3f  precision %.3f  recall %.3f (drops on %.2f%% of the pixels)\n",
                 r.ground_truth->iou, r.ground_truth->precision, r.ground_truth->recall, 100 * r.ground_truth->gt_fraction);
@@ -51,10 +62,14 @@ Command make(CLI::App& root) {
                   "Weights stem (<stem>.json + <stem>.bin); default $WEATHERGS_LED_WEIGHTS, else the installed models/led/led");
   sub->add_flag("--per-view", a->per_view,
                 "Each view's own attention (drops on a window, sliding drops) instead of the mean over the training views");
-  sub->add_option("--threshold", a->threshold, "Mask where the attention >= t (default: the weights' calibrated t)")
+  sub->add_option("--threshold", a->threshold, "Mask where the attention >= t (default: the weights' calibrated t; implies --rule above)")
       ->check(CLI::Range(0.0, 1.0));
-  sub->add_option("--rule", a->rule, "above: attention >= t (the paper); band: lo <= attention <= hi (the released code)")
-      ->capture_default_str()->check(CLI::IsMember({"above", "band"}));
+  sub->add_option("--rule", a->rule,
+                  "above: attention >= t (the paper); band: lo <= attention <= hi (the released code); peak: per drop, "
+                  ">= fraction x its peak (default: peak when the weights store a calibrated peak rule, else above)")
+      ->check(CLI::IsMember({"above", "band", "peak"}));
+  sub->add_option("--peak", a->peak, "LOW SEED FRACTION of --rule peak (default: the weights' calibrated ones; implies --rule peak)")
+      ->expected(3);
   sub->add_option("--band", a->band, "The band of --rule band")->expected(2)->capture_default_str();
   sub->add_option("--dilate", a->options.mask.dilate_iterations,
                   "3x3 dilations of the mask (default: the weights' calibrated count; 3 with --rule band)")

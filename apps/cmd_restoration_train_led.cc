@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "apps/command.h"
+#include "apps/led_scores.h"
 #include "restoration/led_training.h"
 
 namespace weathergs::cli {
@@ -25,9 +26,13 @@ int run(TrainLedArgs& a) {
   if (!a.held_out.empty()) {
     std::printf("calibrated threshold %.3f and %d dilations: mean IoU %.3f over held-out datasets with drops\n",
                 r.calibration.threshold, r.calibration.dilate_iterations, r.calibration.mean_iou);
-    for (const auto& s : r.calibration.scores)
-      std::printf("  %-32s IoU %.3f  precision %.3f  recall %.3f  (drops on %.2f%% of pixels, masked %.2f%%)\n",
-                  s.dataset.c_str(), s.iou, s.precision, s.recall, 100 * s.gt_fraction, 100 * s.mask_fraction);
+    print_led_scores(r.calibration.scores);
+    if (r.calibration.peak) {
+      const restoration::LedPeakRule& p = *r.calibration.peak;
+      std::printf("calibrated peak rule (low %.2f, seed %.2f, fraction %.2f): mean IoU %.3f\n", p.low, p.seed, p.fraction,
+                  r.calibration.peak_mean_iou);
+      print_led_scores(r.calibration.peak_scores);
+    }
   }
   std::printf("wrote %s.json and %s.bin\n", a.out.c_str(), a.out.c_str());
   return kExitOk;
@@ -58,7 +63,15 @@ Command make(CLI::App& root) {
                 "Choose the dilations (0..3) with the threshold for the held-out mask IoU (higher IoU, worse reconstructions: "
                 "docs/restoration.md)")
       ->excludes(dilate);
+  sub->add_flag("--calibrate-peak", a->options.calibrate_peak,
+                "Also calibrate the peak-relative rule (per drop, attention >= fraction x its peak) and store it with the "
+                "weights: `detect` then uses it by default (docs/restoration.md)");
   sub->add_option("--colour-jitter", t.colour_jitter, "Photometric augmentation: channel and overall gains in [1-j, 1+j] (0 = off)")
+      ->capture_default_str();
+  sub->add_option("--balance-drops", t.drop_balance_area,
+                  "Drop-size balance of the loss: pixels of a drop smaller than this many internal pixels weigh "
+                  "sqrt(R / area), at most 4 (0 = off, the paper's plain MSE)")
+      ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
   return {sub, [a, sub] {
             a->command = "weathergs train-led";

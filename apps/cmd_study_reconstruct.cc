@@ -33,7 +33,10 @@ int run(ReconstructArgs& a) {
   if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
   if (study::recipe(o.method).particle_filter && study::recipe(o.method).aef == restoration::FilterMethod::kLearned)
     o.aef_weights = find_aef_weights(a.aef_weights);
-  if (a.led_threshold > 0) o.led_mask.threshold = a.led_threshold;
+  if (a.led_threshold > 0) {  // a global threshold: the paper's rule, also for weights with a peak rule
+    o.led_mask.rule = restoration::LedThresholdRule::kAbove;
+    o.led_mask.threshold = a.led_threshold;
+  }
   const bool nerf = study::recipe(o.method).backend == study::Backend::kNerf;
   const int total = nerf ? o.nerf.iterations : o.iterations;
   ProgressBar bar("train", total);
@@ -119,7 +122,8 @@ Command make(CLI::App& root) {
   sub->add_option("--aef-weights", a->aef_weights,
                   "Learned AEF weights folder (derain, desnow, selector; weathergs, weathergs-no-led, weathergs-nerf); "
                   "default $WEATHERGS_AEF_WEIGHTS, else the installed models/aef");
-  sub->add_option("--led-threshold", a->led_threshold, "LED mask threshold (default: the weights' calibrated one)")
+  sub->add_option("--led-threshold", a->led_threshold,
+                  "LED mask where the attention >= t (default: the weights' calibrated rule, docs/restoration.md)")
       ->check(CLI::Range(0.0, 1.0));
   a->scoring.add_to(sub);
   return {sub, [a] { return run(*a); }};

@@ -17,7 +17,13 @@ namespace weathergs::restoration {
 namespace fs = std::filesystem;
 
 const char* to_string(LedAveraging a) { return a == LedAveraging::kPerView ? "per-view" : "train-views"; }
-const char* to_string(LedThresholdRule r) { return r == LedThresholdRule::kBand ? "band" : "above"; }
+const char* to_string(LedThresholdRule r) {
+  switch (r) {
+    case LedThresholdRule::kBand: return "band";
+    case LedThresholdRule::kPeak: return "peak";
+    default: return "above";
+  }
+}
 
 void LedMaskOptions::validate() const {
   if (threshold && !(*threshold > 0 && *threshold < 1))
@@ -25,20 +31,60 @@ void LedMaskOptions::validate() const {
   if (!(band_lo >= 0 && band_lo < band_hi && band_hi <= 1))
     throw InputError("LED band", "expected 0 <= lo < hi <= 1, got [" + std::to_string(band_lo) + ", " + std::to_string(band_hi) + "]");
   if (dilate_iterations) checked_dilations(*dilate_iterations);
+  if (peak) peak->validate();
 }
 
-int LedMaskOptions::resolved_dilations(const LensDetector& led) const {
-  if (dilate_iterations) return *dilate_iterations;
-  return rule == LedThresholdRule::kBand ? kReleasedCodeDilations : led.dilate_iterations();
+LedMaskOptions LedMaskOptions::resolved(const LensDetector& led) const {
+  LedMaskOptions r = *this;
+  if (!r.rule) r.rule = led.peak_rule() ? LedThresholdRule::kPeak : LedThresholdRule::kAbove;
+  if (!r.threshold) r.threshold = led.threshold();
+  if (!r.peak) r.peak = led.peak_rule().value_or(LedPeakRule{});
+  if (!r.dilate_iterations) r.dilate_iterations = *r.rule == LedThresholdRule::kBand ? kReleasedCodeDilations : led.dilate_iterations();
+  r.validate();
+  return r;
 }
 
-Image attention_to_mask(const Image& attention, double t, int dilations, const LedMaskOptions& o) {
-  checked_dilations(dilations);
+namespace {
+
+// kPeak: label the 8-connected regions of m >= low, take each region's maximum, keep the pixels at or
+// above max(low, fraction * maximum) of the regions whose maximum reaches seed.
+cv::Mat peak_relative_mask(const cv::Mat& a, const LedPeakRule& p) {
+  cv::Mat above = a >= float(p.low), labels;
+  const int n = cv::connectedComponents(above, labels, 8, CV_32S);
+  std::vector<float> peak(size_t(n), 0.f);
+  for (int y = 0; y < a.rows; ++y)
+    for (int x = 0; x < a.cols; ++x) {
+      const int l = labels.at<int32_t>(y, x);
+      if (l > 0) peak[size_t(l)] = std::max(peak[size_t(l)], a.at<float>(y, x));
+    }
+  std::vector<float> level(size_t(n), 2.f);  // 2: above every attention, the region is dropped
+  for (int l = 1; l < n; ++l)
+    if (peak[size_t(l)] >= float(p.seed)) level[size_t(l)] = std::max(float(p.low), float(p.fraction) * peak[size_t(l)]);
+  cv::Mat m(a.rows, a.cols, CV_32FC1);
+  for (int y = 0; y < a.rows; ++y)
+    for (int x = 0; x < a.cols; ++x) {
+      const int l = labels.at<int32_t>(y, x);
+      m.at<float>(y, x) = l > 0 && a.at<float>(y, x) >= level[size_t(l)] ? 1.f : 0.f;
+    }
+  return m;
+}
+
+}  // namespace
+
+Image attention_to_mask(const Image& attention, const LedMaskOptions& o) {
+  WGS_CHECK(o.rule && o.threshold && o.peak && o.dilate_iterations);  // resolved
+  const int dilations = checked_dilations(*o.dilate_iterations);
   Image m(attention.width, attention.height, 1, ColorSpace::kLinear);
-  for (size_t i = 0; i < m.data.size(); ++i) {
-    const float a = attention.data[i];
-    const bool on = o.rule == LedThresholdRule::kBand ? (a >= o.band_lo && a <= o.band_hi) : a >= t;
-    m.data[i] = on ? 1.f : 0.f;
+  if (*o.rule == LedThresholdRule::kPeak) {
+    const cv::Mat a(attention.height, attention.width, CV_32FC1, const_cast<float*>(attention.data.data()));
+    const cv::Mat on = peak_relative_mask(a, *o.peak);
+    std::memcpy(m.data.data(), on.ptr<float>(), m.data.size() * sizeof(float));
+  } else {
+    for (size_t i = 0; i < m.data.size(); ++i) {
+      const float a = attention.data[i];
+      const bool on = *o.rule == LedThresholdRule::kBand ? (a >= o.band_lo && a <= o.band_hi) : a >= *o.threshold;
+      m.data[i] = on ? 1.f : 0.f;
+    }
   }
   if (dilations > 0) {
     cv::Mat mat(m.height, m.width, CV_32FC1, m.data.data());
@@ -107,8 +153,7 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   const auto start = std::chrono::steady_clock::now();
   const Dataset ds = read_dataset(dataset);
   const LensDetector led = LensDetector::load(o.weights);
-  const double t = o.mask.threshold.value_or(led.threshold());
-  const int dilations = o.mask.resolved_dilations(led);
+  const LedMaskOptions mask_options = o.mask.resolved(led);
   auto input_path = [&](const std::string& view) {
     return o.images_dir.empty() ? ds.path(ImageKind::kImages, view) : (fs::path(o.images_dir) / (view + layout::kImageExt)).string();
   };
@@ -138,8 +183,7 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
     attention = attention_in_batches(led, images, ds.root, o.batch, &bar);
   }
   DetectDatasetReport report;
-  report.threshold = t;
-  report.dilate_iterations = dilations;
+  report.mask = mask_options;
   report.seconds_per_view = seconds_since(net_start) / double(std::max<size_t>(1, images.size()));
   const Image averaged = o.averaging == LedAveraging::kTrainViews ? average(attention) : Image();
   AtomicDirectory dir(out);
@@ -154,7 +198,7 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
     if (own) ++k;
     if (a.width != c.width || a.height != c.height)
       throw InputError(input_path(c.name), "differs in size from the training views; kTrainViews averaging needs one size");
-    const Image mask = attention_to_mask(a, t, dilations, o.mask);
+    const Image mask = attention_to_mask(a, mask_options);
     double frac = 0, mean = 0;
     for (size_t i = 0; i < mask.data.size(); ++i) frac += mask.data[i], mean += a.data[i];
     DetectViewReport v{c.name, frac / double(mask.data.size()), mean / double(mask.data.size())};
@@ -188,10 +232,11 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
                {"weights_sha256", led.metadata().value("weights_sha256", "")},
                {"averaging", to_string(o.averaging)},
                {"averaged_views", o.averaging == LedAveraging::kTrainViews ? Json(names) : Json()},
-               {"rule", to_string(o.mask.rule)},
-               {"threshold", o.mask.rule == LedThresholdRule::kAbove ? Json(t) : Json()},
-               {"band", o.mask.rule == LedThresholdRule::kBand ? Json{o.mask.band_lo, o.mask.band_hi} : Json()},
-               {"dilate_iterations", dilations},
+               {"rule", to_string(*mask_options.rule)},
+               {"threshold", *mask_options.rule == LedThresholdRule::kAbove ? Json(*mask_options.threshold) : Json()},
+               {"band", *mask_options.rule == LedThresholdRule::kBand ? Json{o.mask.band_lo, o.mask.band_hi} : Json()},
+               {"peak_rule", *mask_options.rule == LedThresholdRule::kPeak ? mask_options.peak->to_json() : Json()},
+               {"dilate_iterations", *mask_options.dilate_iterations},
                {"attention", o.save_attention ? Json(kDetectAttentionDir) : Json()},
                {"ground_truth", gt_json},
                {"seconds", report.seconds},

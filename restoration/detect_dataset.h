@@ -26,22 +26,27 @@ const char* to_string(LedAveraging a);
 
 // How the averaged attention becomes a mask. kAbove: m >= t (the paper's M = 1(C >= t)). kBand: the
 // released code's interactive band lo <= m <= hi, default [0.5, 0.7] (a named preset, not our default).
-enum class LedThresholdRule { kAbove, kBand };
+// kPeak: per drop, a level relative to its own peak (LedPeakRule, lens_detector.h).
+enum class LedThresholdRule { kAbove, kBand, kPeak };
 const char* to_string(LedThresholdRule r);
 
 struct LedMaskOptions {
-  LedThresholdRule rule = LedThresholdRule::kAbove;
+  // Default: kPeak when the weights store a calibrated peak rule, else kAbove.
+  std::optional<LedThresholdRule> rule;
   std::optional<double> threshold;   // kAbove; default: the weights' calibrated threshold
   double band_lo = 0.5, band_hi = 0.7;  // kBand
-  // 3x3 dilations of the thresholded mask. Default: the weights' count (the one their t was calibrated
-  // for) with kAbove, kReleasedCodeDilations with kBand (the released code's preset).
+  std::optional<LedPeakRule> peak;   // kPeak; default: the weights' calibrated rule, else LedPeakRule{}
+  // 3x3 dilations of the thresholded mask. Default: the weights' count (the one their t or peak rule
+  // was calibrated for) with kAbove and kPeak, kReleasedCodeDilations with kBand (the released code's preset).
   std::optional<int> dilate_iterations;
   void validate() const;
-  int resolved_dilations(const LensDetector& led) const;
+  // Every optional filled in from the weights as documented above.
+  LedMaskOptions resolved(const LensDetector& led) const;
 };
 
-// Attention -> {0, 1} mask with `t` (resolved threshold) and the rule, then `dilations` 3x3 dilations.
-Image attention_to_mask(const Image& attention, double t, int dilations, const LedMaskOptions& options);
+// Attention -> {0, 1} mask by `options` (resolved: rule, threshold, peak and dilations set), then
+// its 3x3 dilations.
+Image attention_to_mask(const Image& attention, const LedMaskOptions& options);
 
 // A predicted mask against ground-truth lens masks, pixel counts summed over the views (one IoU for
 // the set). A set without drops and without a prediction scores IoU 1.
@@ -68,8 +73,7 @@ struct DetectViewReport {
 };
 struct DetectDatasetReport {
   std::vector<DetectViewReport> views;  // dataset order
-  double threshold = 0;
-  int dilate_iterations = 0;            // resolved
+  LedMaskOptions mask;                  // the post-processing used, resolved
   double seconds = 0;
   double seconds_per_view = 0;          // network time only
   std::optional<LedScore> ground_truth; // when the dataset has masks/lens: over the averaged views

@@ -40,7 +40,7 @@ std::vector<LedExample> read_led_examples(const std::string& dataset) {
 }
 
 LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mo,
-                             bool search_dilations) {
+                             bool search_dilations, bool search_peak) {
   if (held_out.empty()) throw InputError("LED calibration", "needs at least one held-out dataset");
   // The mean attention is computed once per dataset; only the threshold varies.
   struct Cached {
@@ -62,8 +62,16 @@ LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::str
     c.attention = mean_attention(led, views, d);
     cache.push_back(std::move(c));
   }
+  auto score_rule = [&](const Cached& c, LedThresholdRule rule, double t, const LedPeakRule& peak, int dilations) {
+    LedMaskOptions m = mo;
+    m.rule = rule;
+    m.threshold = t;
+    m.peak = peak;
+    m.dilate_iterations = dilations;
+    return score_lens_masks(c.name, {attention_to_mask(c.attention, m)}, c.gts);
+  };
   auto score = [&](const Cached& c, double t, int dilations) {
-    return score_lens_masks(c.name, {attention_to_mask(c.attention, t, dilations, mo)}, c.gts);
+    return score_rule(c, LedThresholdRule::kAbove, t, LedPeakRule{}, dilations);
   };
   LedCalibration best;
   best.mean_iou = -1;
@@ -80,7 +88,70 @@ LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::str
       if (mean > best.mean_iou + 1e-12) best.mean_iou = mean, best.threshold = t, best.dilate_iterations = dilations;
     }
   for (const Cached& c : cache) best.scores.push_back(score(c, best.threshold, best.dilate_iterations));
+  if (!search_peak) return best;
+  best.peak_mean_iou = -1;
+  for (int l = 2; l <= 6; ++l)
+    for (int sd = l; sd <= 7; ++sd)
+      for (int f = 0; f <= 8; ++f) {
+        const LedPeakRule p{l / 10.0, sd / 10.0, (10 + f) / 20.0};
+        double sum = 0;
+        int n = 0;
+        for (const Cached& c : cache)
+          if (c.has_drops) sum += score_rule(c, LedThresholdRule::kPeak, best.threshold, p, best.dilate_iterations).iou, ++n;
+        const double mean = n > 0 ? sum / n : 0;
+        if (mean > best.peak_mean_iou + 1e-12) best.peak_mean_iou = mean, best.peak = p;
+      }
+  for (const Cached& c : cache)
+    best.peak_scores.push_back(score_rule(c, LedThresholdRule::kPeak, best.threshold, *best.peak, best.dilate_iterations));
   return best;
+}
+
+namespace {
+
+Json scores_json(const std::vector<LedScore>& scores) {
+  Json out = Json::array();
+  for (const LedScore& s : scores)
+    out.push_back({{"dataset", s.dataset}, {"iou", s.iou}, {"precision", s.precision}, {"recall", s.recall},
+                   {"gt_fraction", s.gt_fraction}, {"mask_fraction", s.mask_fraction}});
+  return out;
+}
+
+void apply_calibration(LensDetector& led, const LedCalibration& c) {
+  led.set_threshold(c.threshold);
+  led.set_dilate_iterations(c.dilate_iterations);
+  led.set_peak_rule(c.peak);
+}
+
+}  // namespace
+
+Json calibration_json(const LedCalibration& c, const std::vector<std::string>& held_out, const std::string& grid) {
+  Json held = Json::array();
+  for (const std::string& d : held_out) held.push_back(dataset_name(d));
+  Json j{{"held_out", held},
+         {"grid", grid + ", maximizing the mean IoU of the averaged mask over held-out datasets with drops"},
+         {"dilate_iterations", c.dilate_iterations},
+         {"threshold", c.threshold},
+         {"mean_iou", c.mean_iou},
+         {"scores", scores_json(c.scores)}};
+  if (c.peak)
+    j["peak_rule"] = {{"grid", kPeakGrid}, {"rule", c.peak->to_json()}, {"mean_iou", c.peak_mean_iou}, {"scores", scores_json(c.peak_scores)}};
+  return j;
+}
+
+LedCalibration recalibrate_led(const std::string& weights_stem, const std::vector<std::string>& held_out,
+                               const std::string& out_stem, bool search_peak, const std::string& command) {
+  if (held_out.empty()) throw InputError("calibrate-led", "needs at least one --held-out dataset");
+  LensDetector led = LensDetector::load(weights_stem);
+  LedMaskOptions mo;
+  mo.dilate_iterations = led.dilate_iterations();
+  const LedCalibration c = calibrate_led(led, held_out, mo, false, search_peak);
+  apply_calibration(led, c);
+  Json extra = led.metadata();
+  if (extra.contains("calibration")) extra["previous_calibration"] = extra["calibration"];
+  extra["calibration"] = calibration_json(c, held_out, "0.05..0.95 step 0.025");
+  extra["calibration"]["command"] = command;
+  led.save(out_stem, extra);
+  return c;
 }
 
 TrainLedResult train_led(const std::vector<std::string>& train_datasets, const std::vector<std::string>& held_out,
@@ -100,17 +171,11 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
   result.record = led.train(examples, o.train);
   examples.clear();
   if (!held_out.empty()) {
-    result.calibration = calibrate_led(led, held_out, o.mask, o.calibrate_dilations);
-    led.set_threshold(result.calibration.threshold);
-    led.set_dilate_iterations(result.calibration.dilate_iterations);
+    result.calibration = calibrate_led(led, held_out, o.mask, o.calibrate_dilations, o.calibrate_peak);
+    apply_calibration(led, result.calibration);
   }
-  Json scores = Json::array();
-  for (const LedScore& s : result.calibration.scores)
-    scores.push_back({{"dataset", s.dataset}, {"iou", s.iou}, {"precision", s.precision}, {"recall", s.recall},
-                      {"gt_fraction", s.gt_fraction}, {"mask_fraction", s.mask_fraction}});
-  Json names = Json::array(), held = Json::array();
+  Json names = Json::array();
   for (const std::string& d : train_datasets) names.push_back(dataset_name(d));
-  for (const std::string& d : held_out) held.push_back(dataset_name(d));
   const Json extra{
       {"model", "Lens Effect Detector (attentive-recurrent, AttentiveGAN-style)"},
       {"command", o.command},
@@ -122,19 +187,14 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
         {"learning_rate", o.train.learning_rate},
         {"theta", o.train.theta},
         {"colour_jitter", o.train.colour_jitter},
+        {"drop_balance_area", o.train.drop_balance_area},
         {"seed", o.train.seed},
         {"threads", o.train.threads},
         {"seconds", result.record.seconds},
         {"loss_per_50_iterations", result.record.loss_curve}}},
-      {"calibration",
-       {{"held_out", held},
-        {"grid", std::string("0.05..0.95 step 0.025") +
-                     (o.calibrate_dilations ? " x 0.." + std::to_string(kMaxCalibratedDilations) + " dilations" : "") +
-                     ", maximizing the mean IoU of the averaged mask over held-out datasets with drops"},
-        {"dilate_iterations", result.calibration.dilate_iterations},
-        {"threshold", result.calibration.threshold},
-        {"mean_iou", result.calibration.mean_iou},
-        {"scores", scores}}}};
+      {"calibration", calibration_json(result.calibration, held_out,
+                                       std::string("0.05..0.95 step 0.025") +
+                                           (o.calibrate_dilations ? " x 0.." + std::to_string(kMaxCalibratedDilations) + " dilations" : ""))}};
   led.save(out_stem, extra);
   return result;
 }

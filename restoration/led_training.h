@@ -2,6 +2,7 @@
 // `weathergs train-led`, `make models`). libtorch-free.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,10 @@ struct LedCalibration {
   int dilate_iterations = kReleasedCodeDilations;
   double mean_iou = 0;                  // over the held-out datasets with drops
   std::vector<LedScore> scores;         // at the chosen threshold and dilations
+  // With search_peak: the peak-relative rule chosen for the same dilations, its mean IoU and scores.
+  std::optional<LedPeakRule> peak;
+  double peak_mean_iou = 0;
+  std::vector<LedScore> peak_scores;
 };
 // The dilation counts a calibration with search_dilations tries: none up to the released code's three.
 inline constexpr int kMaxCalibratedDilations = kReleasedCodeDilations;
@@ -26,9 +31,13 @@ inline constexpr int kMaxCalibratedDilations = kReleasedCodeDilations;
 // drops (datasets without drops only enter through precision: a false mask there lowers nothing in
 // IoU, so they are reported, not optimized), for mask_options' dilation count (default the released
 // code's 3), or with search_dilations over 0..3 dilations too. Ties go to fewer dilations, then to the
-// smaller t.
+// smaller t. With search_peak, also the peak-relative rule (LedPeakRule) for the chosen dilations,
+// on the grid kPeakGrid describes (ties go to the first in low, seed, fraction order).
 LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mask_options,
-                             bool search_dilations = false);
+                             bool search_dilations = false, bool search_peak = false);
+inline constexpr const char* kPeakGrid = "low 0.2..0.6 step 0.1 x seed low..0.7 step 0.1 x fraction 0.5..0.9 step 0.05";
+// The calibration as stored in the weights' JSON ("calibration"); `grid` describes the t search.
+Json calibration_json(const LedCalibration& c, const std::vector<std::string>& held_out, const std::string& grid);
 
 struct TrainLedOptions {
   LedTrainOptions train;
@@ -37,6 +46,8 @@ struct TrainLedOptions {
   // Also choose the dilation count (0..3) on the held-out views. Off by default: the IoU-best count
   // (none) gave a higher mask IoU but worse WeatherGS reconstructions (docs/restoration.md).
   bool calibrate_dilations = false;
+  // Also calibrate the peak-relative rule and store it with the weights (detect's default rule then).
+  bool calibrate_peak = false;
   std::string command;  // the command line, recorded in the manifest
 };
 struct TrainLedResult {
@@ -48,5 +59,11 @@ struct TrainLedResult {
 // (with the training record, the datasets, the calibration and the command).
 TrainLedResult train_led(const std::vector<std::string>& train_datasets, const std::vector<std::string>& held_out,
                          const std::string& out_stem, const TrainLedOptions& options);
+
+// `weathergs calibrate-led`: calibrates trained weights again on `held_out` (threshold for the weights'
+// dilation count, and the peak rule with search_peak) and writes them to out_stem: the same network
+// (same blob and sha256), a new calibration; the previous one is kept as "previous_calibration".
+LedCalibration recalibrate_led(const std::string& weights_stem, const std::vector<std::string>& held_out,
+                               const std::string& out_stem, bool search_peak, const std::string& command);
 
 }  // namespace weathergs::restoration

@@ -126,11 +126,40 @@ torch::Tensor mask_to_tensor(const Image& mask, int w, int h) {
   return torch::from_blob(small.ptr<float>(), {1, h, w}, torch::kFloat32).clone().clamp(0.f, 1.f);
 }
 
-torch::Tensor attention_loss(const std::vector<torch::Tensor>& maps, const torch::Tensor& target, double theta) {
+// sum_t theta^(N-1-t) MSE(A_t, M); with `weight` (same shape as the target) each MSE is the weighted mean.
+torch::Tensor attention_loss(const std::vector<torch::Tensor>& maps, const torch::Tensor& target, double theta,
+                             const torch::Tensor& weight = {}) {
   torch::Tensor loss = torch::zeros({});
   const int n = int(maps.size());
-  for (int t = 0; t < n; ++t) loss = loss + std::pow(theta, n - 1 - t) * F::mse_loss(maps[size_t(t)], target);
+  for (int t = 0; t < n; ++t) {
+    const torch::Tensor mse = weight.defined() ? ((maps[size_t(t)] - target).square() * weight).sum() / weight.sum()
+                                               : F::mse_loss(maps[size_t(t)], target);
+    loss = loss + std::pow(theta, n - 1 - t) * mse;
+  }
   return loss;
+}
+
+// The per-pixel weights of the drop-size balance for one internal-size mask [1, h, w]: pixels of a
+// drop (8-connected region where the mask is > 0, its soft rim included) of area A < R get
+// sqrt(R / A), capped at kMaxDropWeight; the rest 1.
+torch::Tensor drop_balance_weights(const torch::Tensor& mask, double area_ref) {
+  const int h = int(mask.size(1)), w = int(mask.size(2));
+  const torch::Tensor m = mask.contiguous();
+  cv::Mat drop(h, w, CV_8UC1);
+  const float* mp = m.data_ptr<float>();
+  for (int i = 0; i < h * w; ++i) drop.data[i] = mp[i] > 0.f ? 1 : 0;
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(drop, labels, stats, centroids, 8, CV_32S);
+  std::vector<float> component_weight(size_t(n), 1.f);
+  for (int c = 1; c < n; ++c) {
+    const double area = stats.at<int>(c, cv::CC_STAT_AREA);
+    component_weight[size_t(c)] = float(std::clamp(std::sqrt(area_ref / area), 1.0, kMaxDropWeight));
+  }
+  torch::Tensor out = torch::empty({1, h, w}, torch::kFloat32);
+  float* op = out.data_ptr<float>();
+  const int32_t* lp = labels.ptr<int32_t>();
+  for (int i = 0; i < h * w; ++i) op[i] = component_weight[size_t(lp[i])];
+  return out;
 }
 
 // Images and masks of `examples` at the internal size (one aspect ratio for all); InputError names
@@ -183,9 +212,30 @@ void LedTrainOptions::validate() const {
   if (!(learning_rate > 0 && learning_rate < 1))
     throw InputError("LED training learning_rate", "expected in (0, 1), got " + std::to_string(learning_rate));
   if (!(theta > 0 && theta <= 1)) throw InputError("LED training theta", "expected in (0, 1], got " + std::to_string(theta));
+  if (!(drop_balance_area >= 0 && drop_balance_area <= 1e6))
+    throw InputError("LED training drop_balance_area", "expected 0 (off) to 1e6 internal pixels, got " + std::to_string(drop_balance_area));
   if (!(colour_jitter >= 0 && colour_jitter <= 0.5))
     throw InputError("LED training colour_jitter", "expected in [0, 0.5], got " + std::to_string(colour_jitter));
   if (threads < 0) throw InputError("LED training threads", "expected >= 0, got " + std::to_string(threads));
+}
+
+void LedPeakRule::validate() const {
+  if (!(low > 0 && low <= seed && seed < 1))
+    throw InputError("LED peak rule", "expected 0 < low <= seed < 1, got low " + std::to_string(low) + ", seed " + std::to_string(seed));
+  if (!(fraction > 0 && fraction <= 1))
+    throw InputError("LED peak rule fraction", "expected in (0, 1], got " + std::to_string(fraction));
+}
+
+Json LedPeakRule::to_json() const { return {{"low", low}, {"seed", seed}, {"fraction", fraction}}; }
+
+LedPeakRule LedPeakRule::from_json(const JsonReader& r) {
+  LedPeakRule p;
+  p.low = r.get_number("low", 0, 1);
+  p.seed = r.get_number("seed", 0, 1);
+  p.fraction = r.get_number("fraction", 0, 1);
+  r.finish();
+  p.validate();
+  return p;
 }
 
 struct LensDetector::Impl {
@@ -193,6 +243,7 @@ struct LensDetector::Impl {
   LedNet net{nullptr};
   double threshold = 0.5;
   int dilate_iterations = kReleasedCodeDilations;
+  std::optional<LedPeakRule> peak_rule;
   Json metadata = Json::object();
 };
 
@@ -222,6 +273,11 @@ int checked_dilations(int n) {
 }
 int LensDetector::dilate_iterations() const { return impl_->dilate_iterations; }
 void LensDetector::set_dilate_iterations(int n) { impl_->dilate_iterations = checked_dilations(n); }
+const std::optional<LedPeakRule>& LensDetector::peak_rule() const { return impl_->peak_rule; }
+void LensDetector::set_peak_rule(const std::optional<LedPeakRule>& rule) {
+  if (rule) rule->validate();
+  impl_->peak_rule = rule;
+}
 const Json& LensDetector::metadata() const { return impl_->metadata; }
 
 int64_t LensDetector::parameter_count() const {
@@ -235,6 +291,8 @@ void LensDetector::save(const std::string& stem, const Json& extra) const {
   j["architecture"] = impl_->arch.to_json();
   j["threshold"] = impl_->threshold;
   j["dilate_iterations"] = impl_->dilate_iterations;
+  if (impl_->peak_rule) j["peak_rule"] = impl_->peak_rule->to_json();
+  else j.erase("peak_rule");
   j["parameters"] = parameter_count();
   detail::save_weights(*impl_->net, stem, j);  // + the tensor table, the blob and its sha256
 }
@@ -246,6 +304,7 @@ LensDetector LensDetector::load(const std::string& stem) {
   detail::load_weights(*d.impl_->net, r, stem);
   d.impl_->threshold = r.get_number("threshold", 1e-6, 1 - 1e-6);
   d.impl_->dilate_iterations = int(r.get_number_or("dilate_iterations", kReleasedCodeDilations, 0, kMaxDilations));
+  if (r.has("peak_rule")) d.impl_->peak_rule = LedPeakRule::from_json(r.child("peak_rule"));
   d.impl_->metadata = r.value();
   return d;
 }
@@ -257,6 +316,10 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
   torch::set_num_threads(o.threads > 0 ? o.threads : num_threads());
   std::vector<torch::Tensor> xs, ms;
   examples_to_tensors(examples, impl_->arch, "LED training example ", xs, ms);
+  std::vector<torch::Tensor> ws;
+  const bool balance = o.drop_balance_area > 0;
+  if (balance)
+    for (const torch::Tensor& m : ms) ws.push_back(drop_balance_weights(m, o.drop_balance_area));
   LedNet& net = impl_->net;
   net->train();
   torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(o.learning_rate));
@@ -267,7 +330,7 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
   for (int it = 0; it < o.iterations; ++it) {
     // Batch and flips keyed on (seed, iteration): the same run whatever the thread count.
     Rng rng(o.seed, kStreamLedBatch, uint64_t(it));
-    std::vector<torch::Tensor> bx, bm;
+    std::vector<torch::Tensor> bx, bm, bw;
     for (int b = 0; b < o.batch; ++b) {
       const size_t k = rng.uniform_int(uint32_t(xs.size()));
       const bool flip = rng.uniform() < 0.5f;
@@ -282,10 +345,12 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
       }
       bx.push_back(x);
       bm.push_back(flip ? ms[k].flip({2}) : ms[k]);
+      if (balance) bw.push_back(flip ? ws[k].flip({2}) : ws[k]);
     }
     detail::set_cosine_learning_rate(adam, o.learning_rate, it, o.iterations);
     adam.zero_grad();
-    const torch::Tensor loss = attention_loss(net->forward(torch::stack(bx)), torch::stack(bm), o.theta);
+    const torch::Tensor loss = attention_loss(net->forward(torch::stack(bx)), torch::stack(bm), o.theta,
+                                              balance ? torch::stack(bw) : torch::Tensor());
     loss.backward();
     adam.step();
     const double l = loss.item<double>();

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,23 @@ struct LedArchitecture {
   static LedArchitecture from_json(const JsonReader& r);
 };
 
+// The peak-relative threshold of the averaged attention (docs/restoration.md, "The peak-relative
+// rule"): every 8-connected region where m >= low whose maximum reaches seed keeps its pixels with
+// m >= max(low, fraction * maximum); regions whose maximum stays under seed are dropped. The network is
+// less sure of medium drops than of large ones (their peaks are lower), so one global threshold
+// segments them smaller or not at all; a level relative to each drop's own peak does not depend on it.
+struct LedPeakRule {
+  double low = 0.3;
+  double seed = 0.4;
+  double fraction = 0.7;
+  void validate() const;  // 0 < low <= seed < 1, 0 < fraction <= 1
+  Json to_json() const;
+  static LedPeakRule from_json(const JsonReader& r);
+};
+
+// The largest per-pixel weight of the drop-size balance (LedTrainOptions::drop_balance_area).
+inline constexpr double kMaxDropWeight = 4.0;
+
 struct LedTrainOptions {
   LedArchitecture arch;
   int iterations = 4500;
@@ -48,6 +66,11 @@ struct LedTrainOptions {
   // uniform in [1 - j, 1 + j], times an overall gain from the same range that also scales the
   // sharpness channel (values clamped to [0, 1]). 0 = off (no draws), as for the shipped LED.
   double colour_jitter = 0;
+  // Drop-size balance of the attention loss, in internal pixels (0 = off: the paper's plain MSE).
+  // With R > 0 every pixel of a ground-truth drop (a connected region of the mask at the internal
+  // size) of area A < R weighs sqrt(R / A), at most kMaxDropWeight, all other pixels 1, and the
+  // loss is the weighted mean: small and medium drops count per drop more like the large ones do.
+  double drop_balance_area = 0;
   uint64_t seed = 1;
   int threads = 0;              // 0 = all cores (libtorch intra-op threads)
   bool progress = true;
@@ -89,6 +112,10 @@ class LensDetector {
   // (kReleasedCodeDilations for weights saved before the count was stored).
   int dilate_iterations() const;
   void set_dilate_iterations(int n);
+  // The calibrated peak-relative rule stored with the weights (`peak_rule` in <stem>.json), if any;
+  // `weathergs detect` uses it by default when present (docs/restoration.md).
+  const std::optional<LedPeakRule>& peak_rule() const;
+  void set_peak_rule(const std::optional<LedPeakRule>& rule);
   const Json& metadata() const;  // the JSON read by load (empty for a fresh network)
 
   // Trains in place on `examples` (resized to the internal width once, up front). Deterministic for a
