@@ -19,6 +19,15 @@ struct DetectArgs {
   restoration::DetectDatasetOptions options;
 };
 
+std::string describe_rule(const restoration::LedMaskOptions& m) {
+  switch (*m.rule) {
+    case restoration::LedThresholdRule::kBand: return fmt::format("rule band [{:.3f}, {:.3f}]", m.band_lo, m.band_hi);
+    case restoration::LedThresholdRule::kPeak:
+      return fmt::format("rule peak (low {:.3f}, seed {:.3f}, fraction {:.3f})", m.peak->low, m.peak->seed, m.peak->fraction);
+    default: return fmt::format("rule above t {:.3f}", *m.threshold);
+  }
+}
+
 int run(DetectArgs& a) {
   a.options.weights = find_led_weights(a.weights);
   a.options.images_dir = a.images;
@@ -33,16 +42,10 @@ int run(DetectArgs& a) {
   const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
   double mean = 0;
   for (const auto& v : r.views) mean += v.mask_fraction / double(r.views.size());
-  const restoration::LedMaskOptions& m = r.mask;
-  std::string rule = std::string("rule ") + restoration::to_string(*m.rule);
-  if (*m.rule == restoration::LedThresholdRule::kAbove) rule += " t " + fmt::format("{:.3f}", *m.threshold);
-  if (*m.rule == restoration::LedThresholdRule::kBand) rule += " [" + fmt::format("{:.3f}", m.band_lo) + ", " + fmt::format("{:.3f}", m.band_hi) + "]";
-  if (*m.rule == restoration::LedThresholdRule::kPeak)
-    rule += " (low " + fmt::format("{:.3f}", m.peak->low) + ", seed " + fmt::format("{:.3f}", m.peak->seed) + ", fraction " + fmt::format("{:.3f}", m.peak->fraction) + ")";
   std::printf("detected lens drops on %zu views in %.2f s (%.1f ms per view in the network), %s, %s, %d dilations: "
               "%.1f%% of the pixels masked on average\nwrote %s\n",
-              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging), rule.c_str(),
-              *m.dilate_iterations, 100 * mean, a.out.c_str());
+              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging),
+              describe_rule(r.mask).c_str(), *r.mask.dilate_iterations, 100 * mean, a.out.c_str());
   if (r.ground_truth)
     std::printf("against the dataset's masks/lens: IoU %.3f  precision %.3f  recall %.3f (drops on %.2f%% of the pixels)\n",
                 r.ground_truth->iou, r.ground_truth->precision, r.ground_truth->recall, 100 * r.ground_truth->gt_fraction);
@@ -62,14 +65,15 @@ Command make(CLI::App& root) {
                   "Weights stem (<stem>.json + <stem>.bin); default $WEATHERGS_LED_WEIGHTS, else the installed models/led/led");
   sub->add_flag("--per-view", a->per_view,
                 "Each view's own attention (drops on a window, sliding drops) instead of the mean over the training views");
-  sub->add_option("--threshold", a->threshold, "Mask where the attention >= t (default: the weights' calibrated t; implies --rule above)")
+  CLI::Option* threshold = sub->add_option("--threshold", a->threshold, "Mask where the attention >= t (default: the weights' calibrated t; implies --rule above)")
       ->check(CLI::Range(0.0, 1.0));
   sub->add_option("--rule", a->rule,
                   "above: attention >= t (the paper); band: lo <= attention <= hi (the released code); peak: per drop, "
                   ">= fraction x its peak (default: peak when the weights store a calibrated peak rule, else above)")
       ->check(CLI::IsMember({"above", "band", "peak"}));
   sub->add_option("--peak", a->peak, "LOW SEED FRACTION of --rule peak (default: the weights' calibrated ones; implies --rule peak)")
-      ->expected(3);
+      ->expected(3)
+      ->excludes(threshold);
   sub->add_option("--band", a->band, "The band of --rule band")->expected(2)->capture_default_str();
   sub->add_option("--dilate", a->options.mask.dilate_iterations,
                   "3x3 dilations of the mask (default: the weights' calibrated count; 3 with --rule band)")
