@@ -475,8 +475,17 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
   // --threshold on such weights means the global rule again.
   ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "pk") + " --threshold 0.5 --out " + (tmp / "mt"), tmp / "mt.log"), 0);
   EXPECT_EQ(read_json_file(tmp / "mt/detect.json").at("rule"), "above");
+  // Bad input: no held-out dataset, missing weights, a held-out folder that is no dataset: exit 2
+  // naming what is wrong, nothing written.
   EXPECT_EQ(run_cli("calibrate-led --weights " + (tmp / "w") + " --out " + (tmp / "pk2"), tmp / "pk2.log"), 2);
+  EXPECT_EQ(run_cli("calibrate-led --weights " + (tmp / "nope") + " --held-out " + (tmp / "held") + " --out " + (tmp / "pk2"),
+                    tmp / "pk3.log"), 2);
+  EXPECT_NE(read_file(tmp / "pk3.log").find("nope.json"), std::string::npos) << read_file(tmp / "pk3.log");
+  EXPECT_EQ(run_cli("calibrate-led --weights " + (tmp / "w") + " --held-out " + (tmp / "none") + " --out " + (tmp / "pk2"),
+                    tmp / "pk4.log"), 2);
+  EXPECT_NE(read_file(tmp / "pk4.log").find(tmp / "none"), std::string::npos) << read_file(tmp / "pk4.log");
   EXPECT_FALSE(fs::exists(tmp / "pk2.json"));
+  EXPECT_FALSE(fs::exists(tmp / "pk2.bin"));
 }
 
 }  // namespace
