@@ -44,9 +44,11 @@ struct LedArchitecture {
 // m >= max(low, fraction * maximum); regions whose maximum stays under seed are dropped. The network is
 // less sure of medium drops than of large ones (their peaks are lower), so one global threshold
 // segments them smaller or not at all; a level relative to each drop's own peak does not depend on it.
+// The defaults (used by `detect --rule peak` on weights without a calibrated rule) are the shipped
+// weights' calibration.
 struct LedPeakRule {
   double low = 0.3;
-  double seed = 0.4;
+  double seed = 0.3;
   double fraction = 0.7;
   void validate() const;  // 0 < low <= seed < 1, 0 < fraction <= 1
   Json to_json() const;
