@@ -70,35 +70,33 @@ LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::str
     m.dilate_iterations = dilations;
     return score_lens_masks(c.name, {attention_to_mask(c.attention, m)}, c.gts);
   };
-  auto score = [&](const Cached& c, double t, int dilations) {
-    return score_rule(c, LedThresholdRule::kAbove, t, LedPeakRule{}, dilations);
+  // The mean IoU over the held-out datasets with drops (the calibration's objective).
+  auto mean_iou = [&](LedThresholdRule rule, double t, const LedPeakRule& peak, int dilations) {
+    double sum = 0;
+    int n = 0;
+    for (const Cached& c : cache)
+      if (c.has_drops) sum += score_rule(c, rule, t, peak, dilations).iou, ++n;
+    return n > 0 ? sum / n : 0;
   };
   LedCalibration best;
   best.mean_iou = -1;
   const int fixed = mo.dilate_iterations.value_or(kReleasedCodeDilations);
   const int lo = search_dilations ? 0 : fixed, hi = search_dilations ? kMaxCalibratedDilations : fixed;
   for (int dilations = lo; dilations <= hi; ++dilations)
-    for (int k = 0; k <= 36; ++k) {
+    for (int k = 0; k <= 36; ++k) {  // kThresholdGrid
       const double t = 0.05 + 0.025 * k;
-      double sum = 0;
-      int n = 0;
-      for (const Cached& c : cache)
-        if (c.has_drops) sum += score(c, t, dilations).iou, ++n;
-      const double mean = n > 0 ? sum / n : 0;
+      const double mean = mean_iou(LedThresholdRule::kAbove, t, LedPeakRule{}, dilations);
       if (mean > best.mean_iou + 1e-12) best.mean_iou = mean, best.threshold = t, best.dilate_iterations = dilations;
     }
-  for (const Cached& c : cache) best.scores.push_back(score(c, best.threshold, best.dilate_iterations));
+  for (const Cached& c : cache)
+    best.scores.push_back(score_rule(c, LedThresholdRule::kAbove, best.threshold, LedPeakRule{}, best.dilate_iterations));
   if (!search_peak) return best;
   best.peak_mean_iou = -1;
-  for (int l = 2; l <= 6; ++l)
+  for (int l = 2; l <= 6; ++l)  // kPeakGrid
     for (int sd = l; sd <= 7; ++sd)
       for (int f = 0; f <= 8; ++f) {
         const LedPeakRule p{l / 10.0, sd / 10.0, (10 + f) / 20.0};
-        double sum = 0;
-        int n = 0;
-        for (const Cached& c : cache)
-          if (c.has_drops) sum += score_rule(c, LedThresholdRule::kPeak, best.threshold, p, best.dilate_iterations).iou, ++n;
-        const double mean = n > 0 ? sum / n : 0;
+        const double mean = mean_iou(LedThresholdRule::kPeak, best.threshold, p, best.dilate_iterations);
         if (mean > best.peak_mean_iou + 1e-12) best.peak_mean_iou = mean, best.peak = p;
       }
   for (const Cached& c : cache)
@@ -148,7 +146,7 @@ LedCalibration recalibrate_led(const std::string& weights_stem, const std::vecto
   apply_calibration(led, c);
   Json extra = led.metadata();
   if (extra.contains("calibration")) extra["previous_calibration"] = extra["calibration"];
-  extra["calibration"] = calibration_json(c, held_out, "0.05..0.95 step 0.025");
+  extra["calibration"] = calibration_json(c, held_out, kThresholdGrid);
   extra["calibration"]["command"] = command;
   led.save(out_stem, extra);
   return c;
@@ -193,7 +191,7 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
         {"seconds", result.record.seconds},
         {"loss_per_50_iterations", result.record.loss_curve}}},
       {"calibration", calibration_json(result.calibration, held_out,
-                                       std::string("0.05..0.95 step 0.025") +
+                                       std::string(kThresholdGrid) +
                                            (o.calibrate_dilations ? " x 0.." + std::to_string(kMaxCalibratedDilations) + " dilations" : ""))}};
   led.save(out_stem, extra);
   return result;

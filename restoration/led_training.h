@@ -35,6 +35,7 @@ inline constexpr int kMaxCalibratedDilations = kReleasedCodeDilations;
 // on the grid kPeakGrid describes (ties go to the first in low, seed, fraction order).
 LedCalibration calibrate_led(const LensDetector& led, const std::vector<std::string>& held_out, const LedMaskOptions& mask_options,
                              bool search_dilations = false, bool search_peak = false);
+inline constexpr const char* kThresholdGrid = "0.05..0.95 step 0.025";
 inline constexpr const char* kPeakGrid = "low 0.2..0.6 step 0.1 x seed low..0.7 step 0.1 x fraction 0.5..0.9 step 0.05";
 // The calibration as stored in the weights' JSON ("calibration"); `grid` describes the t search.
 Json calibration_json(const LedCalibration& c, const std::vector<std::string>& held_out, const std::string& grid);
