@@ -108,6 +108,8 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     row_done[r] = bits;
   };
   for (int r = 0; r < kTileSize; ++r) refresh_row(r);
+  vf block_power[kTilePixels / W];  // the second pass's blocks: power, first pixel
+  int block_pixel[kTilePixels / W];
   const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
   const vf lane_center = lane_centers<W>(x0);
   constexpr int64_t kPrefetch = 8;  // records are scattered over memory: fetch ahead of use
@@ -128,7 +130,11 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     const vi contributor = vi{} + int32_t(k - begin + 1);
     const int bx0 = ((px0 - x0) / W) * W, bx1 = px1 - x0;
     const uint32_t span = ((uint32_t(2) << (px1 - x0)) - 1) & ~((uint32_t(1) << (px0 - x0)) - 1);
-    vi stopped = {};
+    // Two passes: first the blocks that a live pixel can take alpha >= 1/255 from, with their
+    // power (a short loop of cheap, unpredictable branches), then the blend of exactly those blocks
+    // (independent of each other, no data-dependent branch). The same blocks in the same order with
+    // the same operations as one pass: the same bits.
+    int num_blocks = 0;
     for (int py = py0; py <= py1; ++py) {
       if ((row_done[py - y0] & span) == span) continue;
       const vf dy = splat<vf>(sp[1] - (float(py) + 0.5f));
@@ -138,22 +144,30 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
         const vf dx = mx - (lane_center + float(bx));
         const vf power = -0.5f * (ca * dx * dx + cc * dy * dy) - cb * dx * dy;
         const vi live = load<vi>(&done[p]) == 0;
-        if (!any_lane<W>((power >= power_min) & live)) continue;
-        const vf alpha = vmin(splat<vf>(float(kAlphaMax)), o * blend_exp_v<W>(vmin(power, splat<vf>(0.f))));
-        const vf tp = load<vf>(&trans[p]);
-        const vf test_t = tp * (1.f - alpha);
-        const vi ok = (power <= 0.f) & (alpha >= float(kAlphaMin)) & live;
-        const vi stop = ok & (test_t < float(kTransmittanceMin));
-        const vi add = ok & ~stop;
-        const vf w = add ? alpha * tp : splat<vf>(0.f);
-        store(&cr[p], load<vf>(&cr[p]) + r * w);
-        store(&cg[p], load<vf>(&cg[p]) + g * w);
-        store(&cb_[p], load<vf>(&cb_[p]) + b * w);
-        store(&trans[p], add ? test_t : tp);
-        store(&last[p], add ? contributor : load<vi>(&last[p]));
-        store(&done[p], load<vi>(&done[p]) | stop);
-        stopped -= stop;
+        block_power[num_blocks] = power;
+        block_pixel[num_blocks] = p;
+        num_blocks += any_lane<W>((power >= power_min) & live);
       }
+    }
+    vi stopped = {};
+    for (int j = 0; j < num_blocks; ++j) {
+      const int p = block_pixel[j];
+      const vf power = block_power[j];
+      const vi live = load<vi>(&done[p]) == 0;
+      const vf alpha = vmin(splat<vf>(float(kAlphaMax)), o * blend_exp_v<W>(vmin(power, splat<vf>(0.f))));
+      const vf tp = load<vf>(&trans[p]);
+      const vf test_t = tp * (1.f - alpha);
+      const vi ok = (power <= 0.f) & (alpha >= float(kAlphaMin)) & live;
+      const vi stop = ok & (test_t < float(kTransmittanceMin));
+      const vi add = ok & ~stop;
+      const vf w = add ? alpha * tp : splat<vf>(0.f);
+      store(&cr[p], load<vf>(&cr[p]) + r * w);
+      store(&cg[p], load<vf>(&cg[p]) + g * w);
+      store(&cb_[p], load<vf>(&cb_[p]) + b * w);
+      store(&trans[p], add ? test_t : tp);
+      store(&last[p], add ? contributor : load<vi>(&last[p]));
+      store(&done[p], load<vi>(&done[p]) | stop);
+      stopped -= stop;
     }
     int64_t entry_stops = 0;
     for (int l = 0; l < W; ++l) entry_stops += stopped[l];
