@@ -131,9 +131,10 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     const int bx0 = ((px0 - x0) / W) * W, bx1 = px1 - x0;
     const uint32_t span = ((uint32_t(2) << (px1 - x0)) - 1) & ~((uint32_t(1) << (px0 - x0)) - 1);
     // Two passes: first the blocks that a live pixel can take alpha >= 1/255 from, with their
-    // power (a short loop of cheap, unpredictable branches), then the blend of exactly those blocks
-    // (independent of each other, no data-dependent branch). The same blocks in the same order with
-    // the same operations as one pass: the same bits.
+    // power (every candidate is written, and kept by advancing the count: no branch on the test),
+    // then the blend of exactly those blocks (independent of each other, no data-dependent branch).
+    // The same blocks in the same order with the same operations as one pass: the same bits.
+    // Measured 6-10 % faster than testing and blending block by block (benchmarks/README.md).
     int num_blocks = 0;
     for (int py = py0; py <= py1; ++py) {
       if ((row_done[py - y0] & span) == span) continue;
