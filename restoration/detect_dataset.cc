@@ -10,6 +10,7 @@
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/json_reader.h"
+#include "core/parallel.h"
 #include "core/progress.h"
 
 namespace weathergs::restoration {
@@ -119,15 +120,20 @@ LedScore score_lens_masks(const std::string& name, const std::vector<Image>& pre
 
 namespace {
 
-// The network over `views` in chunks of `batch`, results in view order.
+// The network over `views` in chunks of `batch`, results in view order. The chunks run in parallel,
+// each on one libtorch thread (LensDetector::attention): a chunk's maps do not depend on which thread
+// ran it, so the output does not depend on the thread count (test restoration/lens_detector), and
+// on 2 cores a dataset takes about half the time of one view after the other.
 std::vector<Image> attention_in_batches(const LensDetector& led, const std::vector<Image>& views, const std::string& where,
                                         int batch, ProgressBar* bar) {
-  std::vector<Image> out;
-  for (size_t b = 0; b < views.size(); b += size_t(batch)) {
-    const std::vector<Image> chunk(views.begin() + long(b), views.begin() + long(std::min(views.size(), b + size_t(batch))));
-    for (Image& a : led.attention(chunk, where)) out.push_back(std::move(a));
-    if (bar) bar->tick(int64_t(chunk.size()));
-  }
+  const int64_t n = int64_t(views.size());
+  std::vector<Image> out(views.size());
+  parallel_for_chunks(0, n, batch, [&](int64_t, int64_t lo, int64_t hi) {
+    const std::vector<Image> chunk(views.begin() + lo, views.begin() + hi);
+    std::vector<Image> maps = led.attention(chunk, where);
+    for (int64_t i = lo; i < hi; ++i) out[size_t(i)] = std::move(maps[size_t(i - lo)]);
+    if (bar) bar->tick(hi - lo);
+  });
   return out;
 }
 

@@ -445,10 +445,14 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
                     tmp / "band.log"), 0) << read_file(tmp / "band.log");
   EXPECT_EQ(read_json_file(tmp / "band/detect.json").at("dilate_iterations").get<int>(), kReleasedCodeDilations);
   EXPECT_FALSE(fs::exists(tmp / "m/attention"));
-  // Per view: each view its own mask; with 1 and 2 threads the same bytes.
-  ASSERT_EQ(run_cli("--threads 1 detect --per-view --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p1"), tmp / "p1.log"), 0);
-  ASSERT_EQ(run_cli("--threads 2 detect --per-view --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p2"), tmp / "p2.log"), 0);
-  for (const Camera& c : ds.cameras) EXPECT_EQ(read_file(tmp / ("p1/" + c.name + ".png")), read_file(tmp / ("p2/" + c.name + ".png")));
+  // Per view: each view its own mask; with 1 and 2 threads (the views then run in parallel) the same
+  // bytes, masks and 16-bit attention maps alike.
+  ASSERT_EQ(run_cli("--threads 1 detect --per-view --save-attention --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p1"), tmp / "p1.log"), 0);
+  ASSERT_EQ(run_cli("--threads 2 detect --per-view --save-attention --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "p2"), tmp / "p2.log"), 0);
+  for (const Camera& c : ds.cameras) {
+    EXPECT_EQ(read_file(tmp / ("p1/" + c.name + ".png")), read_file(tmp / ("p2/" + c.name + ".png")));
+    EXPECT_EQ(read_file(tmp / ("p1/attention/" + c.name + ".png")), read_file(tmp / ("p2/attention/" + c.name + ".png")));
+  }
   // Bad input: missing weights, a threshold out of range: exit 2, nothing written.
   EXPECT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "nope") + " --out " + (tmp / "g"), tmp / "b1.log"), 2);
   EXPECT_NE(read_file(tmp / "b1.log").find("nope.json"), std::string::npos) << read_file(tmp / "b1.log");
