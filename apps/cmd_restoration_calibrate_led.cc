@@ -44,13 +44,7 @@ Command make(CLI::App& root) {
   sub->add_option("--out", a->out, "Output weights stem: writes <stem>.json and <stem>.bin")->required();
   sub->add_flag("--peak", a->peak, "Also calibrate the peak-relative rule and store it (detect's default rule then)");
   return {sub, [a, sub] {
-            a->command = "weathergs calibrate-led";
-            for (const CLI::Option* o : sub->get_options())
-              if (o->count() > 0 && !o->get_lnames().empty()) {
-                a->command += " --" + o->get_lnames()[0];
-                for (const std::string& r : o->results())
-                  if (o->get_expected_max() != 0) a->command += " " + r;
-              }
+            a->command = recorded_command("calibrate-led", *sub);
             return run(*a);
           }};
 }

@@ -91,10 +91,7 @@ Command make(CLI::App& root) {
   sub->add_option("--prior-gain", a->plugin.train.arch.prior_gain, "Plugins: slope of the top-hat alpha prior (0 = none)")
       ->capture_default_str();
   return {sub, [a, sub] {
-            a->command = "weathergs train-aef";
-            for (const CLI::Option* o : sub->get_options())
-              if (o->count() > 0 && !o->get_lnames().empty())
-                for (const std::string& v : o->results()) a->command += " --" + o->get_lnames()[0] + " " + v;
+            a->command = recorded_command("train-aef", *sub);
             return run(*a);
           }};
 }

@@ -74,10 +74,7 @@ Command make(CLI::App& root) {
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
   return {sub, [a, sub] {
-            a->command = "weathergs train-led";
-            for (const CLI::Option* o : sub->get_options())
-              if (o->count() > 0 && !o->get_lnames().empty())
-                for (const std::string& r : o->results()) a->command += " --" + o->get_lnames()[0] + " " + r;
+            a->command = recorded_command("train-led", *sub);
             return run(*a);
           }};
 }

@@ -28,6 +28,12 @@ using CommandFactory = Command (*)(CLI::App& root);
 
 bool register_command(const char* name, CommandFactory factory);
 
+// The command line that reproduces a parsed subcommand, for the manifests of trained weights:
+// "weathergs <name>" and every option given, in declaration order, as `--option value` once per value
+// (options taking a fixed group of values, e.g. `--band LO HI`, once per group), flags as `--flag`;
+// values with characters a shell would split on are single-quoted. Replays as the same command.
+std::string recorded_command(const std::string& name, const CLI::App& sub);
+
 }  // namespace weathergs::cli
 
 #define WGS_REGISTER_COMMAND(name, factory) \

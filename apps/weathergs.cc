@@ -1,6 +1,7 @@
 // The `weathergs` binary: global flags, subcommand dispatch and the mapping of errors to exit codes.
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -24,6 +25,33 @@ std::map<std::string, CommandFactory>& registry() {
 bool register_command(const char* name, CommandFactory factory) {
   registry()[name] = factory;
   return true;
+}
+
+std::string recorded_command(const std::string& name, const CLI::App& sub) {
+  auto quoted = [](const std::string& v) {
+    if (!v.empty() && v.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=.,/:@%") ==
+                          std::string::npos)
+      return v;
+    std::string q = "'";
+    for (char c : v) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+  };
+  std::string cmd = "weathergs " + name;
+  for (const CLI::Option* o : sub.get_options()) {
+    if (o->count() == 0 || o->get_lnames().empty()) continue;
+    const std::string flag = " --" + o->get_lnames()[0];
+    if (o->get_expected_max() == 0) {  // a flag: its result is "true", which would not parse after it
+      cmd += flag;
+      continue;
+    }
+    const size_t group = size_t(std::max(1, o->get_type_size()));
+    const std::vector<std::string>& r = o->results();
+    for (size_t i = 0; i < r.size(); i += group) {
+      cmd += flag;
+      for (size_t j = i; j < std::min(r.size(), i + group); ++j) cmd += " " + quoted(r[j]);
+    }
+  }
+  return cmd;
 }
 
 }  // namespace weathergs::cli
