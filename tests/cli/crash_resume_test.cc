@@ -99,7 +99,7 @@ TEST(CrashResume, TrainKilledAnywhereResumesToTheSameModel) {
                             "--checkpoint-every", "10", "--out", out},
                            delay, f.tmp / "kill.log");
     // What is on disk is complete: run.json parses, and the checkpoint (if any) loads on resume.
-    if (fs::exists(out + "/run.json")) EXPECT_NO_THROW(read_json_file(out + "/run.json"));
+    if (fs::exists(out + "/run.json")) { EXPECT_NO_THROW(read_json_file(out + "/run.json")); }
     if (fs::exists(out + "/checkpoint.bin")) {
       ASSERT_EQ(run("train --resume --out " + out, f.tmp / "resume.log"), 0) << read_file(f.tmp / "resume.log");
     } else {
@@ -125,7 +125,7 @@ TEST(CrashResume, WeatherKilledAnywhereLeavesNothingOrTheOldOutput) {
     SCOPED_TRACE("trial " + std::to_string(trial));
     // Half the trials start from a previous complete output that must survive a killed rewrite.
     const bool previous = trial % 2 == 1;
-    if (previous) ASSERT_EQ(run("weather --in " + f.data + " --spec " + (f.tmp / "spec.json") + " --out " + args_out, f.tmp / "w.log"), 0);
+    if (previous) { ASSERT_EQ(run("weather --in " + f.data + " --spec " + (f.tmp / "spec.json") + " --out " + args_out, f.tmp / "w.log"), 0); }
     const std::string before = previous ? read_file(args_out + "/images/004.png") : "";
     killed += run_and_kill({"weather", "--in", f.data, "--spec", f.tmp / "spec.json", "--out", args_out, "--seed",
                             std::to_string(trial + 10)},
@@ -180,7 +180,7 @@ TEST(CrashResume, GenerateKilledAnywhereLeavesNothing) {
     // killed run had committed its entry, else a clean render).
     ASSERT_EQ(run(base.substr(0, base.find(" --cache ")) + " --cache " + cache + " --out " + out, tmp / "after.log"), 0)
         << read_file(tmp / "after.log");
-    if (!cold) EXPECT_NE(read_file(tmp / "after.log").find("(cached)"), std::string::npos);
+    if (!cold) { EXPECT_NE(read_file(tmp / "after.log").find("(cached)"), std::string::npos); }
     expect_absent_or_complete_dataset(out, "generate after the kill");
     fs::remove_all(out);
   }

@@ -195,8 +195,8 @@ TEST(Targets, WithLensDropsTheTargetsKeepTheSameDrops) {
       for (int x = 0; x < c.width; ++x) {
         float change = 0;
         for (int ch = 0; ch < 3; ++ch) change = std::max(change, std::abs(lens_only.at(x, y, ch) - clean.at(x, y, ch)));
-        if (coverage.at(x, y) == 0.f) ASSERT_EQ(change, 0.f) << c.name << " " << x << "," << y;
-        if (mask.at(x, y) > 0.5f) ASSERT_GT(change * 255.f, 3.5f) << c.name << " " << x << "," << y;
+        if (coverage.at(x, y) == 0.f) { ASSERT_EQ(change, 0.f) << c.name << " " << x << "," << y; }
+        if (mask.at(x, y) > 0.5f) { ASSERT_GT(change * 255.f, 3.5f) << c.name << " " << x << "," << y; }
       }
     (void)no_particles;
   }

@@ -84,7 +84,7 @@ TEST(LensRenderTest, SkyEnvironmentLightsTheUnfollowedPaths) {
   LensViewResult b = LensDropletRenderer(spec, 3, cam).render(img, cam, 0.0, &bright);
   EXPECT_GT(mean(b.image), mean(img) + 1e-4);
   for (size_t p = 0; p < img.num_pixels(); ++p)
-    if (b.coverage.data[p] == 0) ASSERT_EQ(b.image.data[p * 3], img.data[p * 3]) << p;
+    if (b.coverage.data[p] == 0) { ASSERT_EQ(b.image.data[p * 3], img.data[p * 3]) << p; }
   EXPECT_THROW(LensDropletRenderer(spec, 3, cam).render(img, cam, 0.0), InternalError);
 }
 
