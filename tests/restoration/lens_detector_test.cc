@@ -470,29 +470,34 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
   ASSERT_TRUE(pk.contains("peak_rule"));
   EXPECT_EQ(pk.at("calibration").at("peak_rule").at("rule"), pk.at("peak_rule"));
   EXPECT_GT(pk.at("calibration").at("peak_rule").at("mean_iou").get<double>(), 0.5);
+  // A recorded command line with its output stem moved from `from` to `to`, as arguments of the binary.
+  auto retarget = [](std::string cmd, const std::string& from, const std::string& to) {
+    const std::string out = " --out " + from;
+    const size_t at = cmd.find(out);
+    if (at == std::string::npos || cmd.rfind("weathergs ", 0) != 0) return std::string();
+    cmd.replace(at, out.size(), " --out " + to);
+    return cmd.substr(std::string("weathergs ").size());
+  };
   {  // The manifest's command line replays (flags without a value: a bare `--peak true` would not parse).
-    std::string replay = pk.at("calibration").at("command").get<std::string>();
-    ASSERT_EQ(replay.rfind("weathergs calibrate-led ", 0), 0u) << replay;
-    EXPECT_NE(replay.find(" --peak"), std::string::npos) << replay;
-    EXPECT_EQ(replay.find(" true"), std::string::npos) << replay;
-    const std::string out = " --out " + (tmp / "pk");
-    ASSERT_NE(replay.find(out), std::string::npos) << replay;
-    replay.replace(replay.find(out), out.size(), " --out " + (tmp / "pk_replay"));
-    ASSERT_EQ(run_cli(replay.substr(std::string("weathergs ").size()), tmp / "replay.log"), 0) << read_file(tmp / "replay.log");
+    const std::string recorded = pk.at("calibration").at("command").get<std::string>();
+    ASSERT_EQ(recorded.rfind("weathergs calibrate-led ", 0), 0u) << recorded;
+    EXPECT_NE(recorded.find(" --peak"), std::string::npos) << recorded;
+    EXPECT_EQ(recorded.find(" true"), std::string::npos) << recorded;
+    const std::string replay = retarget(recorded, tmp / "pk", tmp / "pk_replay");
+    ASSERT_FALSE(replay.empty()) << recorded;
+    ASSERT_EQ(run_cli(replay, tmp / "replay.log"), 0) << read_file(tmp / "replay.log");
     EXPECT_EQ(read_json_file(tmp / "pk_replay.json").at("peak_rule"), pk.at("peak_rule"));
   }
   {  // So does train-led's, flags included: the same bytes again (one thread, the same seed).
     ASSERT_EQ(run_cli("--threads 1 train-led --data " + (tmp / "train") + " --held-out " + (tmp / "held") + " --out " +
                           (tmp / "tf") + " --iterations 5 --width 48 --channels 4 --steps 2 --calibrate-peak",
                       tmp / "tf.log"), 0) << read_file(tmp / "tf.log");
-    std::string replay = read_json_file(tmp / "tf.json").at("command").get<std::string>();
-    EXPECT_NE(replay.find(" --calibrate-peak"), std::string::npos) << replay;
-    EXPECT_EQ(replay.find(" true"), std::string::npos) << replay;
-    const std::string out = " --out " + (tmp / "tf");
-    ASSERT_NE(replay.find(out), std::string::npos) << replay;
-    replay.replace(replay.find(out), out.size(), " --out " + (tmp / "tf_replay"));
-    ASSERT_EQ(run_cli("--threads 1 " + replay.substr(std::string("weathergs ").size()), tmp / "tfr.log"), 0)
-        << read_file(tmp / "tfr.log");
+    const std::string recorded = read_json_file(tmp / "tf.json").at("command").get<std::string>();
+    EXPECT_NE(recorded.find(" --calibrate-peak"), std::string::npos) << recorded;
+    EXPECT_EQ(recorded.find(" true"), std::string::npos) << recorded;
+    const std::string replay = retarget(recorded, tmp / "tf", tmp / "tf_replay");
+    ASSERT_FALSE(replay.empty()) << recorded;
+    ASSERT_EQ(run_cli("--threads 1 " + replay, tmp / "tfr.log"), 0) << read_file(tmp / "tfr.log");
     EXPECT_EQ(read_file(tmp / "tf_replay.bin"), read_file(tmp / "tf.bin"));
   }
   ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "pk") + " --out " + (tmp / "mp"), tmp / "mp.log"), 0)
