@@ -4,7 +4,7 @@
 For each set of weights, `weathergs detect --save-attention` writes the map averaged over a dataset's
 training views; the ensemble's map is the mean of those maps (the same as averaging the networks'
 per-view maps first: the mean is linear). Its threshold rules are calibrated on the held-out
-datasets exactly as `calibrate-led` does (the global t on 0.200..0.900 by 0.025, then the peak rule
+datasets exactly as `calibrate-led` does (the global t on 0.05..0.95 by 0.025, then the peak rule
 on low 0.2..0.6 x seed low..0.7 x fraction 0.5..0.9; mean IoU over the held-out datasets that have
 drops; three 3x3 dilations) and both are scored on the benchmark datasets (IoU / precision pooled
 over the training views, as detect.json's `ground_truth`; drop-free variants: the masked fraction).
@@ -29,7 +29,7 @@ from scipy import ndimage
 
 DILATIONS = 3
 SQUARE = np.ones((3, 3), bool)
-T_GRID = np.arange(0.2, 0.9001, 0.025)
+T_GRID = np.arange(0.05, 0.9501, 0.025)  # kThresholdGrid (restoration/led_training.h)
 PEAK_GRID = [(lo, seed, frac) for lo in np.arange(0.2, 0.601, 0.1) for seed in np.arange(lo, 0.701, 0.1)
              for frac in np.arange(0.5, 0.901, 0.05)]
 
