@@ -171,6 +171,8 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
     train.insert(names.begin(), names.end());
     if (train.empty()) throw InputError(ds.root, "has an empty train split: nothing to average the LED attention over");
   }
+  // The output folder before the network runs: a bad --out fails at once, not after every view.
+  AtomicDirectory dir(out);
   // Attention of every view (per-view mode) or of the training views only (never the test views).
   std::vector<std::string> names;
   std::vector<Image> images;
@@ -192,7 +194,6 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   report.mask = mask_options;
   report.seconds_per_view = seconds_since(net_start) / double(std::max<size_t>(1, images.size()));
   const Image averaged = o.averaging == LedAveraging::kTrainViews ? average(attention) : Image();
-  AtomicDirectory dir(out);
   if (o.save_attention) fs::create_directories(fs::path(dir.path()) / kDetectAttentionDir);
   Json views = Json::array();
   std::vector<Image> scored_masks, scored_truth;  // ground truth: the averaged (or every) view

@@ -109,6 +109,8 @@ FilterDatasetReport filter_dataset(const std::string& dataset, const std::string
   else if (o.task == AefTask::kAlways) fixed = WeatherClass::kRain;  // top-hat only (validate): rain and snow alike
   const bool select = !fixed.has_value();
   const Models models = load_models(o, select, select || fixed == WeatherClass::kRain, select || fixed == WeatherClass::kSnow);
+  // The output folder before any view is processed: a bad --out fails at once, not after the selector.
+  AtomicDirectory dir(out);
 
   FilterDatasetReport report;
   report.views.resize(ds.cameras.size());
@@ -132,7 +134,6 @@ FilterDatasetReport filter_dataset(const std::string& dataset, const std::string
     }
   }
 
-  AtomicDirectory dir(out);
   if (o.mode == FilterMode::kRestore) fs::create_directories(fs::path(dir.path()) / kFilterMasksDir);
   auto filter_one = [&](size_t i) {
     const auto t0 = std::chrono::steady_clock::now();
