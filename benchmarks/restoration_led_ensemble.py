@@ -27,8 +27,9 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage
 
+from restoration_led_ceiling import dilate, score  # pooled IoU / precision, 3x3 dilations
+
 DILATIONS = 3
-SQUARE = np.ones((3, 3), bool)
 T_GRID = np.arange(0.05, 0.9501, 0.025)  # kThresholdGrid (restoration/led_training.h)
 PEAK_GRID = [(lo, seed, frac) for lo in np.arange(0.2, 0.601, 0.1) for seed in np.arange(lo, 0.701, 0.1)
              for frac in np.arange(0.5, 0.901, 0.05)]
@@ -62,13 +63,6 @@ def truths(dataset):
     return np.stack(out)
 
 
-def score(truth, mask):
-    inter = np.count_nonzero(truth & mask[None])
-    union = np.count_nonzero(truth | mask[None])
-    pred = np.count_nonzero(mask) * truth.shape[0]
-    return (inter / union if union else 1.0), (inter / pred if pred else 1.0)
-
-
 def rule_t(a, t):
     return a >= t
 
@@ -82,10 +76,6 @@ def rule_peak(a, low, seed, fraction):
     peaks = ndimage.maximum(a, labels, index=np.arange(1, n + 1))
     level = np.concatenate([[2.0], np.where(peaks >= seed, np.maximum(low, fraction * peaks), 2.0)])
     return (labels > 0) & (a >= level[labels])
-
-
-def dilate(mask):
-    return ndimage.binary_dilation(mask, SQUARE, iterations=DILATIONS)
 
 
 def main():
@@ -111,13 +101,13 @@ def main():
                 a, report = detect(args, stems[0], d)
                 gt, pr = report.get("ground_truth"), report.get("peak_rule")
                 if gt and pr and report.get("rule") == "peak" and report.get("dilate_iterations") == DILATIONS:
-                    iou, _ = score(bench[d], dilate(rule_peak(a, pr["low"], pr["seed"], pr["fraction"])))
+                    iou, _ = score(bench[d], dilate(rule_peak(a, pr["low"], pr["seed"], pr["fraction"]), DILATIONS))
                     if abs(iou - gt["iou"]) > 2e-3:  # the 16-bit map quantization moves it by ~1e-4
                         sys.exit(f"{d}: this script's peak rule gives IoU {iou:.4f}, detect reported {gt['iou']:.4f}")
         maps = {d: ensemble_map(d) for d in args.held_out}
 
         def held_iou(rule):
-            return float(np.mean([score(held[d], dilate(rule(maps[d])))[0] for d in held_with_drops]))
+            return float(np.mean([score(held[d], dilate(rule(maps[d]), DILATIONS))[0] for d in held_with_drops]))
 
         t = max(T_GRID, key=lambda t: held_iou(lambda a: rule_t(a, t)))
         peak_scores = {g: held_iou(lambda a, g=g: rule_peak(a, *g)) for g in PEAK_GRID}
@@ -127,7 +117,7 @@ def main():
         for rule_name, rule in (("t", lambda a: rule_t(a, t)), ("peak", lambda a: rule_peak(a, *peak))):
             cells = []
             for d in args.benchmark:
-                mask = dilate(rule(ensemble_map(d)))
+                mask = dilate(rule(ensemble_map(d)), DILATIONS)
                 if bench[d].any():
                     iou, precision = score(bench[d], mask)
                     cells.append(f"{d}: {iou:.3f} / {precision:.3f}")
