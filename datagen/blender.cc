@@ -77,8 +77,22 @@ Json blender_job(const SceneSpec& scene, const VariantSpec& variant, const Profi
 
 ProcessResult run_blender_job(const std::string& executable, const std::string& script, const std::string& job_path,
                               const std::string& what, const ProcessOptions& options) {
+  // Blender keeps a session folder (blender_XXXXXX) in $TMPDIR and leaves it behind when the script
+  // raises (--python-exit-code) or the run is killed: every failed render left one in /tmp. It gets a
+  // TMPDIR of its own next to the job file instead, removed when the run ends, however it ends.
+  const fs::path tmp = fs::absolute(fs::path(job_path)).parent_path() / "blender_tmp";
+  fs::create_directories(tmp);
+  struct RemoveOnExit {
+    fs::path path;
+    ~RemoveOnExit() {
+      std::error_code ec;
+      fs::remove_all(path, ec);
+    }
+  } remove_tmp{tmp};
+  ProcessOptions with_tmp = options;
+  with_tmp.env.push_back("TMPDIR=" + tmp.string());
   return run_process({executable, "-b", "--factory-startup", "--python-exit-code", "1", "--python", script, "--", job_path},
-                     what, options);
+                     what, with_tmp);
 }
 
 RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& variant_name, const std::string& profile_name,

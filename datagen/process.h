@@ -11,7 +11,7 @@ struct ProcessOptions {
   std::string log_path;      // stdout and stderr go here (appended); empty: /dev/null
   std::string stdout_path;   // if set, stdout goes here instead (e.g. a query's result)
   double timeout_s = 0;      // 0 = no limit; on expiry the process is killed and an error thrown
-  std::vector<std::string> env;  // extra NAME=VALUE entries
+  std::vector<std::string> env;  // NAME=VALUE entries set for the child (replacing the parent's NAME)
 };
 
 struct ProcessResult {

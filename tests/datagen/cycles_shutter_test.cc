@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include "core/atomic_file.h"
@@ -32,6 +33,29 @@ constexpr double kEndTolerancePx = 1.5;
   const ProcessResult r = run_blender_job("blender", testing::blender_script(), dir / "job.json", "blender", popts);
   if (r.exit_code == 0) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "blender exited " << r.exit_code << "\n" << tail_of_file(popts.log_path, 30);
+}
+
+// Blender leaves its session folder (blender_XXXXXX in $TMPDIR) behind when the script raises, as it
+// does for every bad job; run_blender_job gives it a TMPDIR of its own and removes it, so a failed
+// render leaves nothing in the caller's temporary folder.
+TEST(BlenderJobTest, AFailedJobLeavesNoTemporaryFolder) {
+  if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
+  TempDir tmp;
+  const fs::path parent_tmp = tmp / "parent_tmp", job_dir = tmp / "job";
+  fs::create_directories(parent_tmp);
+  fs::create_directories(job_dir / "render");
+  const char* old_tmpdir = std::getenv("TMPDIR");
+  const std::string saved = old_tmpdir ? old_tmpdir : "";
+  ASSERT_EQ(::setenv("TMPDIR", parent_tmp.c_str(), 1), 0);
+  write_file_atomic(job_dir / "job.json", Json{{"output_dir", job_dir / "render"}}.dump());  // no scene: the script raises
+  ProcessOptions popts;
+  popts.log_path = job_dir / "blender.log";
+  const ProcessResult r = run_blender_job("blender", testing::blender_script(), job_dir / "job.json", "blender", popts);
+  if (old_tmpdir) ::setenv("TMPDIR", saved.c_str(), 1); else ::unsetenv("TMPDIR");
+  EXPECT_EQ(r.exit_code, 1) << tail_of_file(popts.log_path, 30);
+  EXPECT_TRUE(fs::exists(job_dir / "render" / "error.json"));
+  EXPECT_TRUE(fs::is_empty(parent_tmp)) << fs::directory_iterator(parent_tmp)->path();
+  EXPECT_FALSE(fs::exists(job_dir / "blender_tmp"));
 }
 
 Json one_particle(const Camera& cam, const Eigen::Vector3d& p, const Eigen::Vector3d& v, double radius) {

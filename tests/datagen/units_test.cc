@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <filesystem>
 
 #include "core/atomic_file.h"
@@ -30,6 +31,23 @@ TEST(ProcessTest, ExitCodesOutputAndLogs) {
   r = run_process({"printf", "%s|", "a b", "'c'"}, "printf", o);
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_EQ(read_file(tmp / "out.txt"), "a b|'c'|");
+}
+
+// An entry of ProcessOptions::env replaces the parent's variable of that name (getenv in the child
+// returns the first match, so appending it after the parent's would not take effect).
+TEST(ProcessTest, EnvironmentEntriesReplaceTheParents) {
+  TempDir tmp;
+  ASSERT_EQ(::setenv("WEATHERGS_PROCESS_TEST_VAR", "parent", 1), 0);
+  ProcessOptions o;
+  o.stdout_path = tmp / "out.txt";
+  EXPECT_EQ(run_process({"printenv", "WEATHERGS_PROCESS_TEST_VAR"}, "printenv", o).exit_code, 0);
+  EXPECT_EQ(read_file(tmp / "out.txt"), "parent\n");
+  o.env = {"WEATHERGS_PROCESS_TEST_VAR=child", "WEATHERGS_PROCESS_TEST_NEW=x=y"};
+  EXPECT_EQ(run_process({"printenv", "WEATHERGS_PROCESS_TEST_VAR"}, "printenv", o).exit_code, 0);
+  EXPECT_EQ(read_file(tmp / "out.txt"), "child\n");
+  EXPECT_EQ(run_process({"printenv", "WEATHERGS_PROCESS_TEST_NEW"}, "printenv", o).exit_code, 0);
+  EXPECT_EQ(read_file(tmp / "out.txt"), "x=y\n");
+  ::unsetenv("WEATHERGS_PROCESS_TEST_VAR");
 }
 
 TEST(ProcessTest, MissingExecutableAndTimeout) {
