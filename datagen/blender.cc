@@ -1,6 +1,9 @@
 #include "datagen/blender.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 
 #include "core/atomic_file.h"
@@ -79,9 +82,12 @@ ProcessResult run_blender_job(const std::string& executable, const std::string& 
                               const std::string& what, const ProcessOptions& options) {
   // Blender keeps a session folder (blender_XXXXXX) in $TMPDIR and leaves it behind when the script
   // raises (--python-exit-code) or the run is killed: every failed render left one in /tmp. It gets a
-  // TMPDIR of its own next to the job file instead, removed when the run ends, however it ends.
-  const fs::path tmp = fs::absolute(fs::path(job_path)).parent_path() / "blender_tmp";
-  fs::create_directories(tmp);
+  // TMPDIR of its own next to the job file instead (a unique name: two runs may share the folder),
+  // removed when the run ends, however it ends.
+  std::string pattern = (fs::absolute(fs::path(job_path)).parent_path() / "blender_tmp_XXXXXX").string();
+  if (!::mkdtemp(pattern.data()))
+    throw InputError(pattern, std::string("cannot create Blender's temporary folder: ") + std::strerror(errno));
+  const fs::path tmp = pattern;
   struct RemoveOnExit {
     fs::path path;
     ~RemoveOnExit() {

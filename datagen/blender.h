@@ -32,7 +32,7 @@ struct Marker {
 
 // Runs `script` (render_scene.py) on the job file in background Blender with factory settings; an
 // exception in the script exits with code 1. The one command line every caller uses. Blender's
-// temporary files go to `<folder of job_path>/blender_tmp`, removed when the run ends.
+// temporary files go to `<folder of job_path>/blender_tmp_XXXXXX`, removed when the run ends.
 ProcessResult run_blender_job(const std::string& executable, const std::string& script, const std::string& job_path,
                               const std::string& what, const ProcessOptions& options);
 
