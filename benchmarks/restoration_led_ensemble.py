@@ -63,6 +63,14 @@ def truths(dataset):
     return np.stack(out)
 
 
+def cell(label, truth, mask):
+    """One benchmark cell: IoU / precision where the variant has drops, else the share of pixels masked."""
+    if truth.any():
+        iou, precision = score(truth, mask)
+        return f"{label}: {iou:.3f} / {precision:.3f}"
+    return f"{label}: masked {mask.mean() * 100:.2f} %"
+
+
 def rule_t(a, t):
     return a >= t
 
@@ -115,14 +123,7 @@ def main():
         print(f"{name} ({' + '.join(stems)}): held-out IoU t {t:.3f}: {held_iou(lambda a: rule_t(a, t)):.3f}; "
               f"peak {tuple(round(float(x), 2) for x in peak)}: {peak_scores[peak]:.3f}")
         for rule_name, rule in (("t", lambda a: rule_t(a, t)), ("peak", lambda a: rule_peak(a, *peak))):
-            cells = []
-            for d in args.benchmark:
-                mask = dilate(rule(ensemble_map(d)), DILATIONS)
-                if bench[d].any():
-                    iou, precision = score(bench[d], mask)
-                    cells.append(f"{d}: {iou:.3f} / {precision:.3f}")
-                else:
-                    cells.append(f"{d}: masked {mask.mean() * 100:.2f} %")
+            cells = [cell(d, bench[d], dilate(rule(ensemble_map(d)), DILATIONS)) for d in args.benchmark]
             print(f"  {rule_name}: " + "; ".join(cells))
 
 
