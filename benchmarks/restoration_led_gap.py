@@ -13,7 +13,6 @@ Usage: restoration_led_gap.py MASKS
   `weathergs detect --data data/suite_<suite>/<scene>_rain --out MASKS/<suite>_<scene>`, run in the
   repository root (the datasets are read from data/suite_paper and data/suite_physical).
 """
-import json
 import os
 import sys
 
@@ -23,14 +22,11 @@ from scipy import ndimage
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from restoration_led_ceiling import dilate, erode, score  # noqa: E402
+from restoration_led_ensemble import truths as read_truths  # noqa: E402  (the training views' lens masks)
 
 DILATIONS = 3
 MISSED_RECALL = 0.3  # a truth drop less covered than this counts as missed
 SQUARE = np.ones((3, 3), bool)
-
-
-def read_masks(paths):
-    return np.stack([np.asarray(Image.open(p).convert("L")) > 127 for p in paths])
 
 
 def main():
@@ -39,10 +35,9 @@ def main():
     for suite in ("paper", "physical"):
         for scene in ("pool", "tanabata", "factory"):
             ds, out = f"data/suite_{suite}/{scene}_rain", f"{sys.argv[1]}/{suite}_{scene}"
-            with open(f"{ds}/dataset.json") as f:
-                views = json.load(f)["splits"]["train"]
-            truths = read_masks([f"{ds}/masks/lens/{v}.png" for v in views])
-            mask = read_masks([f"{out}/{views[0]}.png"])[0]  # one averaged mask for every view
+            truths = read_truths(ds)
+            first = sorted(f for f in os.listdir(out) if f.endswith(".png"))[0]
+            mask = np.asarray(Image.open(f"{out}/{first}").convert("L")) > 127  # one averaged mask for every view
             majority = truths.mean(axis=0) >= 0.5
             cores = dilate(erode(majority, DILATIONS), DILATIONS)
 
