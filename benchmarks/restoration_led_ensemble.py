@@ -45,9 +45,14 @@ def detect(args, stem, dataset):
                         "--weights", stem, "--save-attention"], check=True, stdout=subprocess.DEVNULL)
     with open(os.path.join(out, "detect.json")) as f:
         report = json.load(f)
+    return read_attention(out, dataset), report
+
+
+def read_attention(out, dataset):
+    """The averaged attention map `detect --save-attention` wrote to OUT (16-bit PNG, value / 65535; one
+    map for every view, so the first training view's)."""
     views = json.load(open(os.path.join(dataset, "dataset.json")))["splits"]["train"]
-    attention = np.asarray(Image.open(os.path.join(out, "attention", views[0] + ".png"))).astype(np.float64) / 65535
-    return attention, report
+    return np.asarray(Image.open(os.path.join(out, "attention", views[0] + ".png"))).astype(np.float64) / 65535
 
 
 def truths(dataset):

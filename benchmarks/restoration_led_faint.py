@@ -5,8 +5,9 @@ per-pixel majority truth (8-connected components of at least MIN_AREA px), each 
 mean over its pixels of how much the lens alone changes the view (|targets/lens_only - clean|, the
 largest of the three channels, 8-bit levels, averaged over the training views), the same for the
 falling particles over it in one view (|images - targets/no_particles|, the mean over the views of its
-per-view mean) and the peak of the averaged attention map `detect --save-attention` wrote. A drop whose peak stays under MISSED_PEAK
-(the shipped peak rule's seed, 0.3) is missed by any calibrated rule.
+per-view mean) and the peak of the averaged attention map `detect --save-attention` wrote. A drop
+whose peak stays under MISSED_PEAK is under both shipped rules' levels (t 0.625, the peak rule's
+seed 0.3).
 
 Usage: restoration_led_faint.py MAPS
   MAPS/<paper|physical>_<pool|tanabata|factory>/attention/<view>.png from
@@ -22,6 +23,7 @@ from PIL import Image
 from scipy import ndimage
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from restoration_led_ensemble import read_attention  # noqa: E402
 from restoration_led_ensemble import truths as read_truths  # noqa: E402  (the training views' lens masks)
 
 MIN_AREA = 20  # px: smaller components are single pixels of the truth's 4-level edge, not drops
@@ -40,7 +42,7 @@ def main():
         for scene in ("pool", "tanabata", "factory"):
             ds, out = f"data/suite_{suite}/{scene}_rain", f"{sys.argv[1]}/{suite}_{scene}"
             views = json.load(open(os.path.join(ds, "dataset.json")))["splits"]["train"]
-            attention = np.asarray(Image.open(f"{out}/attention/{views[0]}.png")).astype(np.float64) / 65535
+            attention = read_attention(out, ds)
             majority = read_truths(ds).mean(0) >= 0.5
             change = np.mean([np.abs(rgb(f"{ds}/targets/lens_only/{v}.png") - rgb(f"{ds}/clean/{v}.png")).max(-1)
                               for v in views], 0)
