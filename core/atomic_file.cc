@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "core/error.h"
 
@@ -23,12 +24,39 @@ std::string unique_suffix() {
   s << ".tmp-" << ::getpid() << "-" << counter++ << "-" << (uint64_t(t) & 0xffff);
   return s.str();
 }
+
+// Creates the missing folders on the way to `dir` (mkdir -p) and returns those it created, shallowest
+// first, so that a failed write can take them away again (remove_created). `path` names the output
+// in the error.
+std::vector<fs::path> create_missing_folders(const fs::path& dir, const std::string& path) {
+  std::vector<fs::path> missing;
+  for (fs::path d = dir; !d.empty() && !fs::exists(d); d = d.parent_path()) {
+    missing.push_back(d);
+    if (d == d.root_path()) break;
+  }
+  std::vector<fs::path> created;
+  for (auto it = missing.rbegin(); it != missing.rend(); ++it) {
+    std::error_code ec;
+    if (fs::create_directory(*it, ec)) {
+      created.push_back(*it);
+    } else if (ec || !fs::is_directory(*it)) {  // not made by a concurrent run: in the way, or denied
+      remove_created(created);
+      throw InputError(path, "cannot create the output folder " + it->string() + ": " +
+                                 (ec ? ec.message() : std::string("a file of that name is in the way")));
+    }
+  }
+  return created;
+}
 }  // namespace
+
+void remove_created(const std::vector<fs::path>& created) {
+  std::error_code ec;
+  for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, ec);  // only if empty
+}
 
 void write_file_atomic_with(const std::string& path, const std::function<void(const std::string&)>& write) {
   fs::path p(path);
-  if (p.has_parent_path() && !fs::exists(p.parent_path()))
-    throw InputError(path, "output directory " + p.parent_path().string() + " does not exist");
+  const std::vector<fs::path> created = create_missing_folders(p.parent_path(), path);
   fs::path tmp = p.parent_path() / (p.stem().string() + unique_suffix() + p.extension().string());
   try {
     write(tmp.string());
@@ -36,6 +64,7 @@ void write_file_atomic_with(const std::string& path, const std::function<void(co
   } catch (...) {
     std::error_code ec;
     fs::remove(tmp, ec);
+    remove_created(created);
     throw;
   }
 }
@@ -67,18 +96,21 @@ AtomicDirectory::AtomicDirectory(const std::string& final_path) : final_path_(fi
   fs::path p = fs::absolute(final_path).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
   final_path_ = p.string();
-  if (!fs::exists(p.parent_path()))
-    throw InputError(final_path, "parent directory " + p.parent_path().string() + " does not exist");
+  created_parents_ = create_missing_folders(p.parent_path(), final_path);
   tmp_path_ = final_path_ + unique_suffix();
   std::error_code ec;
   fs::create_directories(tmp_path_, ec);
-  if (ec) throw InputError(final_path, "cannot create the output folder here: " + ec.message());
+  if (ec) {
+    remove_created(created_parents_);
+    throw InputError(final_path, "cannot create the output folder here: " + ec.message());
+  }
 }
 
 AtomicDirectory::~AtomicDirectory() {
   if (!committed_) {
     std::error_code ec;
     fs::remove_all(tmp_path_, ec);
+    remove_created(created_parents_);
   }
 }
 

@@ -1,9 +1,13 @@
 // Atomic outputs: write to a temporary sibling, then rename over the destination. A failed or killed
-// run leaves either the old file or the complete new one, never half a file.
+// run leaves either the old file or the complete new one, never half a file. Missing folders on the
+// way to an output are created (like `mkdir -p`, and like `train --out`) and removed again when the
+// write fails, so a failed run leaves no empty folders behind either.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace weathergs {
 
@@ -11,6 +15,9 @@ namespace weathergs {
 // removed and the exception propagates. The temp name keeps the extension: "a.png" -> "a.tmp-<r>.png".
 void write_file_atomic_with(const std::string& path, const std::function<void(const std::string&)>& write);
 void write_file_atomic(const std::string& path, const std::string& contents);
+
+// Removes the folders a failed write created (deepest first, each only if empty).
+void remove_created(const std::vector<std::filesystem::path>& created);
 
 // Copies the folder `from` into `to` recursively (created if needed; existing files are overwritten).
 void copy_tree(const std::string& from, const std::string& to);
@@ -34,6 +41,7 @@ class AtomicDirectory {
 
  private:
   std::string final_path_, tmp_path_;
+  std::vector<std::filesystem::path> created_parents_;  // removed again unless committed
   bool committed_ = false;
 };
 

@@ -124,7 +124,9 @@ TEST(ImageTest, WriteIsAtomicAndLeavesNoTempFiles) {
   Image img(3, 3, 3, ColorSpace::kSRGB, 0.5f);
   write_image(dir / "x.png", img);
   EXPECT_EQ(testing::count_entries(dir.path()), 1);
-  EXPECT_THROW(write_image(dir / "no_such_dir/x.png", img), InputError);
+  write_image(dir / "x.png", img);  // over an existing file: still one entry
+  EXPECT_EQ(testing::count_entries(dir.path()), 1);
+  EXPECT_THROW(write_image(dir / "x.png/y.png", img), InputError);  // a file where a folder must be
   EXPECT_EQ(testing::count_entries(dir.path()), 1);
 }
 

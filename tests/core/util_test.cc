@@ -126,5 +126,38 @@ TEST(AtomicFileTest, DirectoryAppearsOnlyOnCommit) {
   EXPECT_EQ(testing::count_entries(dir.path()), 1);
 }
 
+// Missing folders on the way to an output are created (mkdir -p, like `train --out`: the README's
+// walk-through writes renders/ and results/ that a fresh clone lacks) and taken away again when the
+// write fails or the directory is never committed; a file in the way is an InputError naming it.
+TEST(AtomicFileTest, MissingFoldersAreCreatedAndRemovedOnFailure) {
+  TempDir dir;
+  write_file_atomic(dir / "a/b/out.json", "{}");
+  EXPECT_EQ(read_file(dir / "a/b/out.json"), "{}");
+  EXPECT_THROW(write_file_atomic_with(dir / "c/d/out.json", [](const std::string&) { throw InputError("x", "failed"); }),
+               InputError);
+  EXPECT_FALSE(fs::exists(dir / "c"));
+  {
+    AtomicDirectory out(dir / "e/f/ds");
+    write_file_atomic(out.path() + "/a.txt", "a");
+  }  // destroyed without commit: nothing of e/ is left
+  EXPECT_FALSE(fs::exists(dir / "e"));
+  {
+    AtomicDirectory out(dir / "e/f/ds");
+    write_file_atomic(out.path() + "/a.txt", "a");
+    out.commit();
+  }
+  EXPECT_EQ(read_file(dir / "e/f/ds/a.txt"), "a");
+  write_file_atomic(dir / "file", "x");
+  try {
+    write_file_atomic(dir / "file/g/out.json", "{}");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), dir / "file/g/out.json");
+    EXPECT_NE(std::string(e.what()).find("file"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(AtomicDirectory(dir / "file/h/ds"), InputError);
+  EXPECT_EQ(testing::count_entries(dir.path()), 3);  // a, e, file
+}
+
 }  // namespace
 }  // namespace weathergs
