@@ -75,7 +75,7 @@ template <int W>
 WGS_ALWAYS_INLINE typename Lanes<W>::i tile_floor_v(typename Lanes<W>::f v, int grid) {
   using vf = typename Lanes<W>::f;
   using vi = typename Lanes<W>::i;
-  const vf t = v / float(kTileSize);
+  const vf t = v / float(kReferenceTile);
   const vf hi = vf{} + float(grid);
   const vf c = t < 0.0f ? vf{} : (hi < t ? hi : t);  // std::clamp(t, 0, grid)
   const vi n = __builtin_convertvector(c == c ? c : vf{}, vi);
@@ -254,9 +254,10 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   auto ok = in_front & (det > 0.0f) & finite(mean_x) & finite(mean_y) & finite(cov_a) & finite(cov_b) &
             finite(cov_c) & finite(radius) & finite(con_a) & finite(con_b) & finite(con_c);
   const vf cx0 = mean_x - 0.5f, cy0 = mean_y - 0.5f;
-  const vi x0 = tile_floor_v<W>(cx0 - radius, s->tiles_x), y0 = tile_floor_v<W>(cy0 - radius, s->tiles_y);
-  const vi x1 = tile_floor_v<W>(cx0 + radius + float(kTileSize - 1), s->tiles_x);
-  const vi y1 = tile_floor_v<W>(cy0 + radius + float(kTileSize - 1), s->tiles_y);
+  const int gx = reference_tiles(s->width), gy = reference_tiles(s->height);
+  const vi x0 = tile_floor_v<W>(cx0 - radius, gx), y0 = tile_floor_v<W>(cy0 - radius, gy);
+  const vi x1 = tile_floor_v<W>(cx0 + radius + float(kReferenceTile - 1), gx);
+  const vi y1 = tile_floor_v<W>(cy0 + radius + float(kReferenceTile - 1), gy);
   ok &= ((x1 - x0) * (y1 - y0) != 0) & finite(rgb[0]) & finite(rgb[1]) & finite(rgb[2]);
   vf opacity, q_max;
   for (int l = 0; l < W; ++l) {
@@ -267,16 +268,6 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   const vf ext_x = no_alpha ? vf{} - 1.0f : lanewise(q_max * cov_a, [](float v) { return std::sqrt(v); }) + 1.0f;
   const vf ext_y = no_alpha ? vf{} - 1.0f : lanewise(q_max * cov_c, [](float v) { return std::sqrt(v); }) + 1.0f;
   const vf q_lim = no_alpha ? vf{} - 1.0f : q_max * float(1.0001) + float(1e-3);
-  auto floor_v = [](vf v) { return lanewise(v, [](float u) { return std::floor(u); }); };
-  auto ceil_v = [](vf v) { return lanewise(v, [](float u) { return std::ceil(u); }); };
-  auto imax = [](vi a, vi b) { return a < b ? b : a; };
-  auto imin = [](vi a, vi b) { return b < a ? b : a; };
-  vi r0 = imax(x0, tile_floor_v<W>(ceil_v(mean_x - ext_x - 0.5f), s->tiles_x));
-  vi r1 = imax(y0, tile_floor_v<W>(ceil_v(mean_y - ext_y - 0.5f), s->tiles_y));
-  vi r2 = imin(x1, tile_floor_v<W>(floor_v(mean_x + ext_x - 0.5f) + float(kTileSize), s->tiles_x));
-  vi r3 = imin(y1, tile_floor_v<W>(floor_v(mean_y + ext_y - 0.5f) + float(kTileSize), s->tiles_y));
-  const auto empty = (ext_x < 0.0f) | (r2 <= r0) | (r3 <= r1);
-  r0 = empty ? vi{} : r0; r1 = empty ? vi{} : r1; r2 = empty ? vi{} : r2; r3 = empty ? vi{} : r3;
   const vf inv_ca = 1.0f / con_a, inv_cc = 1.0f / con_c;
 
   for (int l = 0; l < count; ++l) {
@@ -296,7 +287,7 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
     sp[5] = opacity[l]; sp[6] = rgb[0][l]; sp[7] = rgb[1][l]; sp[8] = rgb[2][l];
     sp[9] = ext_x[l]; sp[10] = ext_y[l]; sp[11] = q_lim[l];
     int32_t* r = &s->rect[i * 4];
-    r[0] = r0[l]; r[1] = r1[l]; r[2] = r2[l]; r[3] = r3[l];
+    set_pixel_box(s, sp, x0[l], y0[l], x1[l], y1[l], r);  // a few scalar operations per lane, as in the template
     const int w = r[2] - r[0], h = r[3] - r[1], area = w * h;
     if (area > 0 && area <= kMaskTiles) {
       uint64_t mask = area == kMaskTiles ? ~uint64_t(0) : (uint64_t(1) << area) - 1;

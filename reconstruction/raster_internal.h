@@ -25,13 +25,15 @@ inline bool all_finite(std::initializer_list<T> values) {
   return true;
 }
 
-// Integer tile index from a float coordinate, clamped before the conversion (huge or NaN inputs
-// would make the conversion undefined).
+// Integer index on the reference's 16-px tile grid (getRect) from a float coordinate, clamped
+// before the conversion (huge or NaN inputs would make the conversion undefined).
 template <typename T>
 inline int tile_floor_index(T v, int grid) {
-  const T c = std::clamp(v / T(kTileSize), T(0), T(grid));
+  const T c = std::clamp(v / T(kReferenceTile), T(0), T(grid));
   return c == c ? int(c) : 0;
 }
+
+inline int reference_tiles(int pixels) { return (pixels + kReferenceTile - 1) / kReferenceTile; }
 
 // exp for the blend weights. float: a branch-free base-2 reduction, exp(x) = 2^n 2^f with
 // n = round(x log2 e) and f in [-0.5, 0.5], and 2^f = 1 + f q(f) with q of degree 4 (a least-squares
@@ -81,6 +83,27 @@ inline void pixel_range(T mean, T half, int lo_clip, int hi_clip, int* lo, int* 
   const T b = std::clamp(std::floor(mean + half - T(0.5)), T(lo_clip - 1), T(hi_clip));
   *lo = int(a);
   *hi = int(b);
+}
+
+// A Gaussian's pixel box, [lo, hi] along one axis (integer values, kept as T): the pixel centres
+// within the alpha extent `half` of `mean` (as pixel_range), within the reference rectangle's tiles
+// [t0, t1) of 16 px, within the image. Empty (lo > hi) when they do not meet. Float throughout, no
+// round trip through int: GCC folds T(int(ceil(v))) to ceil(v) where it inlines ceil, which would
+// keep a -0 in one code path and not in another.
+template <typename T>
+inline void pixel_box(T mean, T half, int t0, int t1, int size, T* lo, T* hi) {
+  const T first = T(t0 * kReferenceTile), last = T(std::min(size, t1 * kReferenceTile) - 1);
+  *lo = std::clamp(std::ceil(mean - half - T(0.5)), first, last + T(1));
+  *hi = std::clamp(std::floor(mean + half - T(0.5)), first - T(1), last);
+}
+
+// The record's pixel box (sp[12..15]) within the tile [x0, x1) x [y0, y1).
+template <typename T>
+inline void box_in_tile(const T* sp, int x0, int x1, int y0, int y1, int* px0, int* px1, int* py0, int* py1) {
+  *px0 = std::max(x0, int(sp[12]));
+  *px1 = std::min(x1 - 1, int(sp[13]));
+  *py0 = std::max(y0, int(sp[14]));
+  *py1 = std::min(y1 - 1, int(sp[15]));
 }
 
 // Pixel range [*lo, *hi] (within [lo, hi] on entry) of row py where the splat record `sp` can reach
@@ -133,6 +156,32 @@ inline bool tile_touched(const T* sp, T q_max, T inv_ca, T inv_cc, int tx, int t
   return q_min <= q_max;
 }
 
+// The record's pixel box (sp[12..15]) from its alpha extents (sp[9], sp[10]) and the reference
+// rectangle [x0, x1) x [y0, y1) of 16-px tiles, and the rectangle r of kTileSize tiles holding it
+// (all zero when the box is empty).
+template <typename T>
+inline void set_pixel_box(const RasterState<T>* s, T* sp, int x0, int y0, int x1, int y1, int32_t* r) {
+  T bx0 = T(0), bx1 = T(-1), by0 = T(0), by1 = T(-1);
+  if (sp[9] >= T(0)) {
+    pixel_box(sp[0], sp[9], x0, x1, s->width, &bx0, &bx1);
+    pixel_box(sp[1], sp[10], y0, y1, s->height, &by0, &by1);
+  }
+  if (bx0 > bx1 || by0 > by1) {
+    bx0 = by0 = T(0);
+    bx1 = by1 = T(-1);
+    r[0] = r[1] = r[2] = r[3] = 0;
+  } else {
+    r[0] = int(bx0) / kTileSize;
+    r[1] = int(by0) / kTileSize;
+    r[2] = int(bx1) / kTileSize + 1;
+    r[3] = int(by1) / kTileSize + 1;
+  }
+  sp[12] = bx0;
+  sp[13] = bx1;
+  sp[14] = by0;
+  sp[15] = by1;
+}
+
 // Marks Gaussian i as not rendered (the state of a culled Gaussian).
 template <typename T>
 inline void clear_gaussian(RasterState<T>* s, int64_t i) {
@@ -158,12 +207,13 @@ inline void finish_gaussian(RasterState<T>* s, int64_t i, T mean_x, T mean_y, T 
   const T radius = std::ceil(T(3) * std::sqrt(lambda));
   const T conic_a = c / det, conic_b = -b / det, conic_c = a / det;
   if (!all_finite<T>({mean_x, mean_y, a, b, c, radius, conic_a, conic_b, conic_c})) return;
-  // Tile rectangle exactly as the reference's getRect, in its pixel-center-at-integer frame.
+  // Tile rectangle exactly as the reference's getRect (16-px tiles), in its pixel-center-at-integer frame.
   const T px = mean_x - T(0.5), py = mean_y - T(0.5);
-  const int x0 = tile_floor_index(px - radius, s->tiles_x);
-  const int y0 = tile_floor_index(py - radius, s->tiles_y);
-  const int x1 = tile_floor_index(px + radius + T(kTileSize - 1), s->tiles_x);
-  const int y1 = tile_floor_index(py + radius + T(kTileSize - 1), s->tiles_y);
+  const int gx = reference_tiles(s->width), gy = reference_tiles(s->height);
+  const int x0 = tile_floor_index(px - radius, gx);
+  const int y0 = tile_floor_index(py - radius, gy);
+  const int x1 = tile_floor_index(px + radius + T(kReferenceTile - 1), gx);
+  const int y1 = tile_floor_index(py + radius + T(kReferenceTile - 1), gy);
   if ((x1 - x0) * (y1 - y0) == 0) return;
   if (!all_finite<T>({color[0], color[1], color[2]})) return;
   s->radius[i] = int32_t(std::min<T>(radius, T(std::numeric_limits<int32_t>::max() / 2)));
@@ -182,19 +232,12 @@ inline void finish_gaussian(RasterState<T>* s, int64_t i, T mean_x, T mean_y, T 
   sp[10] = alpha_extent(q_max, c);
   // q limit of the per-row spans (row_span) with tile_touched's margin.
   sp[11] = q_max < T(0) ? T(-1) : q_max * T(1.0001) + T(1e-3);
-  // Opacity-aware tiles: the kernels blend only pixels within the alpha extent, so tiles of the
-  // 3-sigma rectangle that no such pixel reaches get no entry (same images and gradients, fewer
-  // entries to bin, sort and replay). `radius` stays the reference's (densification uses it).
+  // Opacity-aware tiles: the kernels blend only the pixel box, the pixels of the 3-sigma rectangle
+  // within the alpha extent, so tiles that no such pixel lies in get no entry (same images and
+  // gradients, fewer entries to bin, sort and replay). `radius` stays the reference's (densification
+  // uses it).
   int32_t* r = &s->rect[i * 4];
-  if (sp[9] < T(0)) {
-    r[0] = r[1] = r[2] = r[3] = 0;
-  } else {
-    r[0] = std::max(x0, tile_floor_index(std::ceil(mean_x - sp[9] - T(0.5)), s->tiles_x));
-    r[1] = std::max(y0, tile_floor_index(std::ceil(mean_y - sp[10] - T(0.5)), s->tiles_y));
-    r[2] = std::min(x1, tile_floor_index(std::floor(mean_x + sp[9] - T(0.5)) + T(kTileSize), s->tiles_x));
-    r[3] = std::min(y1, tile_floor_index(std::floor(mean_y + sp[10] - T(0.5)) + T(kTileSize), s->tiles_y));
-    if (r[2] <= r[0] || r[3] <= r[1]) r[0] = r[1] = r[2] = r[3] = 0;
-  }
+  set_pixel_box(s, sp, x0, y0, x1, y1, r);
   // Tiles of the rectangle that the ellipse misses (its corners, for a tilted or elongated
   // splat) get no entry either. A rectangle one tile high or wide is the ellipse's own extent,
   // so all of its tiles are kept untested; rectangles of more than 64 tiles keep all of theirs.

@@ -118,8 +118,7 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     const float* sp = &s->splat_sorted[int64_t(s->tile_rank[k]) * kSplatFloats];
     if (sp[9] < 0.f) continue;
     int px0, px1, py0, py1;
-    pixel_range(sp[0], sp[9], x0, x1 - 1, &px0, &px1);
-    pixel_range(sp[1], sp[10], y0, y1 - 1, &py0, &py1);
+    box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
     if (px0 > px1) continue;
     const vf mx = splat<vf>(sp[0]), ca = splat<vf>(sp[2]), cb = splat<vf>(sp[3]), cc = splat<vf>(sp[4]);
     const vf o = splat<vf>(sp[5]), r = splat<vf>(sp[6]), g = splat<vf>(sp[7]), b = splat<vf>(sp[8]);
@@ -251,8 +250,7 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
     const float* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
     int px0 = 0, px1 = -1, py0 = 0, py1 = -1;
     if (sp[9] >= 0.f) {
-      pixel_range(sp[0], sp[9], x0, x1 - 1, &px0, &px1);
-      pixel_range(sp[1], sp[10], y0, y1 - 1, &py0, &py1);
+      box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
     }
     if (px0 > px1 || py0 > py1) {
       std::fill_n(slot(k), kEntryGrads, 0.f);

@@ -195,8 +195,7 @@ void render_tiles(const RasterSettings<T>& settings, RasterState<T>* s) {
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T r = sp[6], g = sp[7], b = sp[8];
       int px0, px1, py0, py1;
-      pixel_range(mx, sp[9], x0, x1 - 1, &px0, &px1);
-      pixel_range(my, sp[10], y0, y1 - 1, &py0, &py1);
+      box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
       const int32_t contributor = int32_t(k - begin + 1);
       int32_t stopped = 0;
       for (int py = py0; py <= py1; ++py) {
@@ -330,8 +329,7 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T cr = sp[6], cg = sp[7], cbl = sp[8];
       int px0, px1, py0, py1;
-      pixel_range(mx, sp[9], x0, x1 - 1, &px0, &px1);
-      pixel_range(my, sp[10], y0, y1 - 1, &py0, &py1);
+      box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
       T sum[kEntryGrads] = {};
       for (int py = py0; py <= py1; ++py) {
         const T dy = my - (T(py) + T(0.5));

@@ -1,10 +1,10 @@
 // Tile-based Gaussian rasterizer on the CPU: the forward and backward passes of the reference
 // diff-gaussian-rasterization, with the same constants (gaussian_math.h).
 //
-// Forward: per Gaussian (parallel) projection, 2D covariance and SH colour; binning into 16x16 tiles
-// with the reference's 3-sigma radius, less the tiles where its alpha cannot reach 1/255 (the blend's
-// own cut-off, so images and gradients are unchanged: outside the alpha extent's box and, tested
-// exactly, outside its ellipse); per-tile lists sorted by depth (ties by index); per tile
+// Forward: per Gaussian (parallel) projection, 2D covariance and SH colour; binning into 32x32 tiles
+// of the pixels that the reference's 16x16 tiles of its 3-sigma radius give it, less those where its
+// alpha cannot reach 1/255 (the blend's own cut-off, so images are unchanged: outside the alpha
+// extent's box and, tested exactly, tiles outside its ellipse); per-tile lists sorted by depth (ties by index); per tile
 // (parallel) front-to-back blending. Backward: per tile (parallel) back-to-front replay of each
 // pixel's blend, one gradient slot per (tile, Gaussian) entry; then per Gaussian (parallel) the slots
 // are summed in tile order and pulled back to the parameters. No float atomics, no per-thread
@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/aligned_allocator.h"
 #include "reconstruction/gaussian_math.h"
 #include "reconstruction/gaussians.h"
 
@@ -28,7 +29,7 @@ struct RasterSettings {
 
 // Everything the forward pass produces and the backward pass consumes. Reused between iterations
 // (vectors keep their capacity).
-constexpr int kSplatFloats = 12;
+constexpr int kSplatFloats = 16;
 constexpr int kMaskTiles = 64;
 
 template <typename T>
@@ -42,22 +43,26 @@ struct RasterState {
   std::vector<T> color;          // N x 3
   std::vector<T> depth;          // N, camera z
   std::vector<int32_t> radius;   // N, reference radius in px; 0 = not rendered
-  std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive): the 3-sigma rectangle's
-                                 // tiles that pixels with alpha >= 1/255 can lie in; may be empty
+  std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive): the tiles of the
+                                 // record's pixel box (below); may be empty
   std::vector<uint64_t> tile_mask;  // N: bit b set when tile b (row-major) of a rect of at most
                                     // kMaskTiles tiles meets the alpha >= 1/255 ellipse; larger
                                     // rects have an entry in every tile
   std::vector<uint8_t> clamped;  // N, bit c set when colour channel c was clamped at 0
   // Packed per-Gaussian record read by the tile loops (one cache line): mean x, y, conic a, b, c,
-  // opacity, r, g, b, the half extents (px) of the region where alpha can reach 1/255, and the
-  // largest d^T conic d there (2 ln(255 o) with a rounding margin; -1 when alpha never reaches it).
+  // opacity, r, g, b, the half extents (px) of the region where alpha can reach 1/255, the
+  // largest d^T conic d there (2 ln(255 o) with a rounding margin; -1 when alpha never reaches it),
+  // and the pixel box the kernels blend in (first and last column, first and last row, as floats):
+  // the alpha extents' box within the reference's 3-sigma rectangle of 16x16 tiles.
   std::vector<T> splat;          // N x kSplatFloats
   std::vector<int64_t> entry_offset;  // N + 1: first slot of each Gaussian in the per-Gaussian order
   // Per tile.
   std::vector<int64_t> tile_offset;   // tiles + 1
   std::vector<int32_t> tile_rank;     // entries: depth rank of the Gaussian (index into splat_sorted
                                       // and sorted_gaussian), each tile's range sorted by depth
-  std::vector<T> splat_sorted;        // visible Gaussians' records in depth order
+  // Visible Gaussians' records in depth order; 64-byte aligned, so that a float record (16 floats)
+  // is one cache line and the kernels' one prefetch per record fetches all of it.
+  std::vector<T, AlignedAllocator<T, 64>> splat_sorted;
   std::vector<int32_t> sorted_gaussian;  // visible Gaussians' ids in depth order
   std::vector<int32_t> entry_slot;    // entries: the entry's slot in the per-Gaussian order (each
                                       // Gaussian's entries contiguous, its tiles in row-major order)
