@@ -25,6 +25,12 @@ std::string unique_suffix() {
   return s.str();
 }
 
+// Removes the folders a failed write created (deepest first, each only if empty).
+void remove_created(const std::vector<fs::path>& created) {
+  std::error_code ec;
+  for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, ec);
+}
+
 // Creates the missing folders on the way to `dir` (mkdir -p) and returns those it created, shallowest
 // first, so that a failed write can take them away again (remove_created). `path` names the output
 // in the error.
@@ -48,11 +54,6 @@ std::vector<fs::path> create_missing_folders(const fs::path& dir, const std::str
   return created;
 }
 }  // namespace
-
-void remove_created(const std::vector<fs::path>& created) {
-  std::error_code ec;
-  for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, ec);  // only if empty
-}
 
 void write_file_atomic_with(const std::string& path, const std::function<void(const std::string&)>& write) {
   fs::path p(path);

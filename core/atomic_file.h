@@ -16,9 +16,6 @@ namespace weathergs {
 void write_file_atomic_with(const std::string& path, const std::function<void(const std::string&)>& write);
 void write_file_atomic(const std::string& path, const std::string& contents);
 
-// Removes the folders a failed write created (deepest first, each only if empty).
-void remove_created(const std::vector<std::filesystem::path>& created);
-
 // Copies the folder `from` into `to` recursively (created if needed; existing files are overwritten).
 void copy_tree(const std::string& from, const std::string& to);
 
