@@ -1,11 +1,11 @@
 // Tile-based Gaussian rasterizer on the CPU: the forward and backward passes of the reference
 // diff-gaussian-rasterization, with the same constants (gaussian_math.h).
 //
-// Forward: per Gaussian (parallel) projection, 2D covariance and SH colour; binning into 32x32 tiles
-// of the pixels that the reference's 16x16 tiles of its 3-sigma radius give it, less those where its
-// alpha cannot reach 1/255 (the blend's own cut-off, so images are unchanged: outside the alpha
-// extent's box and, tested exactly, tiles outside its ellipse); per-tile lists sorted by depth (ties by index); per tile
-// (parallel) front-to-back blending. Backward: per tile (parallel) back-to-front replay of each
+// Forward: per Gaussian (parallel) projection, 2D covariance and SH colour; its pixel box: the
+// pixels of the reference's 16x16 tiles of its 3-sigma radius within the box where its alpha can
+// reach 1/255 (the blend's own cut-off, so images are unchanged); binning of the box into 32x32
+// tiles, less those (tested exactly) outside that ellipse; per-tile lists sorted by depth (ties by
+// index); per tile (parallel) front-to-back blending within each box. Backward: per tile (parallel) back-to-front replay of each
 // pixel's blend, one gradient slot per (tile, Gaussian) entry; then per Gaussian (parallel) the slots
 // are summed in tile order and pulled back to the parameters. No float atomics, no per-thread
 // buffers: results are bitwise independent of the thread count.
