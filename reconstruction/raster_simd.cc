@@ -116,8 +116,7 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
   for (int64_t k = begin; k < end && num_done < npix; ++k) {
     if (k + kPrefetch < end) __builtin_prefetch(&s->splat_sorted[int64_t(s->tile_rank[k + kPrefetch]) * kSplatFloats]);
     const float* sp = &s->splat_sorted[int64_t(s->tile_rank[k]) * kSplatFloats];
-    if (sp[9] < 0.f) continue;
-    int px0, px1, py0, py1;
+    int px0, px1, py0, py1;  // the box is empty where alpha never reaches 1/255 (sp[9] < 0)
     box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
     if (px0 > px1) continue;
     const vf mx = splat<vf>(sp[0]), ca = splat<vf>(sp[2]), cb = splat<vf>(sp[3]), cc = splat<vf>(sp[4]);
@@ -248,10 +247,8 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
   for (int32_t k = kmax - 1; k >= 0; --k) {
     if (k >= kPrefetch) __builtin_prefetch(&s->splat_sorted[int64_t(s->tile_rank[begin + k - kPrefetch]) * kSplatFloats]);
     const float* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
-    int px0 = 0, px1 = -1, py0 = 0, py1 = -1;
-    if (sp[9] >= 0.f) {
-      box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
-    }
+    int px0, px1, py0, py1;
+    box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
     if (px0 > px1 || py0 > py1) {
       std::fill_n(slot(k), kEntryGrads, 0.f);
       continue;

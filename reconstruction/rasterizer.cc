@@ -191,7 +191,6 @@ void render_tiles(const RasterSettings<T>& settings, RasterState<T>* s) {
     const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax), t_min = T(kTransmittanceMin);
     for (int64_t k = begin; k < end && num_done < npix; ++k) {
       const T* sp = &s->splat_sorted[int64_t(s->tile_rank[k]) * kSplatFloats];
-      if (sp[9] < T(0)) continue;
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T r = sp[6], g = sp[7], b = sp[8];
       int px0, px1, py0, py1;
@@ -322,14 +321,14 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
     for (int64_t k = kmax; k < end - begin; ++k) std::fill_n(slot(k), kEntryGrads, T(0));
     for (int32_t k = kmax - 1; k >= 0; --k) {
       const T* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
-      if (sp[9] < T(0)) {
+      int px0, px1, py0, py1;  // the box is empty where alpha never reaches 1/255 (sp[9] < 0)
+      box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
+      if (px0 > px1 || py0 > py1) {
         std::fill_n(slot(k), kEntryGrads, T(0));
         continue;
       }
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T cr = sp[6], cg = sp[7], cbl = sp[8];
-      int px0, px1, py0, py1;
-      box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
       T sum[kEntryGrads] = {};
       for (int py = py0; py <= py1; ++py) {
         const T dy = my - (T(py) + T(0.5));
