@@ -22,6 +22,7 @@ Usage:
 Results: docs/restoration.md ("A learned post-processing of the averaged map").
 """
 import argparse
+import json
 import os
 import sys
 
@@ -57,7 +58,6 @@ def log_ratio(x):
 
 
 def features(a, dataset):
-    import json
     views = json.load(open(os.path.join(dataset, "dataset.json")))["splits"]["train"]
     lum = np.stack([luminance(os.path.join(dataset, "images", v + ".png")) for v in views])
     f = {"a": a, "a_blur": ndimage.gaussian_filter(a, 2), "a_max9": ndimage.maximum_filter(a, 9)}
