@@ -22,9 +22,11 @@ LED_WIDTH=${LED_WIDTH:-216}     # the LED's internal width (docs/restoration.md)
 LED_JITTER=${LED_JITTER:-0}     # its colour jitter (0.25 was tried: docs/restoration.md)
 LED_BALANCE=${LED_BALANCE:-0}   # its drop-size balance (--balance-drops; 0 = off)
 LED_HELD_SCENE=${LED_HELD_SCENE:-market}
-# Datasets and clear renders that train the LED only: the photographs and the overcast bases.
+LED_SEED=${LED_SEED:-1}       # its training seed
+# Datasets and clear renders that train the LED only: the photographs, the overcast bases and the
+# scenes of EXTRA_SCENES=1 (scripts/make-training-data.sh).
 led_only() {
-  case $1 in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9]) return 0 ;; esac
+  case $1 in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9] | station* | village*) return 0 ;; esac
   return 1
 }
 train=() held=() held_last=()
@@ -62,7 +64,7 @@ led_job() {
   if [ "$ONLY" = all ] || [ "$ONLY" = led ]; then
     echo "train-models: LED on ${#train[@]} datasets, calibrated on ${#held[@]} held out"
     "$BIN" --threads 1 train-led --data "${train[@]}" --held-out "${held[@]}" --out "$OUT/led/led" \
-      --iterations "$ITERATIONS" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --balance-drops "$LED_BALANCE" --calibrate-peak --seed 1 --threads 1
+      --iterations "$ITERATIONS" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --balance-drops "$LED_BALANCE" --calibrate-peak --seed "$LED_SEED" --threads 1
   fi
   if [ "$ONLY" = all ] || [ "$ONLY" = aef ] || [ "$ONLY" = selector ]; then
     echo "train-models: weather selector on ${#aef_train[@]} datasets, theta calibrated on ${#aef_held[@]} held out"

@@ -75,6 +75,26 @@ TEST(SceneSpecTest, SceneTypesAreTheBlenderLayoutModules) {
   }
 }
 
+// The restoration's training scenes (scripts/make-training-data.sh renders each one clear and as its
+// overcast `wet` and `snowy` variants): every file parses, has a layout module and both variants.
+TEST(SceneSpecTest, TrainingScenesParseWithTheirOvercastVariants) {
+  const std::vector<std::string> types = scene_types();
+  int count = 0;
+  for (const auto& e : std::filesystem::directory_iterator(scene_path("training"))) {
+    if (e.path().extension() != ".json") continue;
+    ++count;
+    const std::string name = e.path().filename().string();
+    const SceneSpec s = read_scene_spec(e.path().string());
+    EXPECT_EQ(s.type, e.path().stem().string()) << name;
+    EXPECT_NE(std::find(types.begin(), types.end(), s.type), types.end()) << name;
+    EXPECT_EQ(s.variant("wet").surface["kind"], "rain") << name;
+    EXPECT_EQ(s.variant("snowy").surface["kind"], "snow") << name;
+    EXPECT_NO_THROW(s.profile("quick")) << name;
+    for (const char* benchmark : {"tanabata", "factory", "pool"}) EXPECT_NE(s.type, benchmark) << name;
+  }
+  EXPECT_EQ(count, 6);  // park, parking_lot, harbour, market, station, village
+}
+
 TEST(SceneSpecTest, EveryProfileHasDistinctViewsAndTestViewsBetweenTrainingViews) {
   for (const char* name : {"tanabata.json", "factory.json", "pool.json"}) {
     const SceneSpec s = read_scene_spec(scene_path(name));
