@@ -46,7 +46,7 @@ def build(b, p, rng):
         side = -1 if i % 2 == 0 else 1
         x = side * rng.uniform(3.0, 22.0)
         y = rng.uniform(0.0, length)
-        if abs(x) > 2.6 and abs(x) < 16.0:
+        if abs(x) < 16.0:  # x is never on the lane (|x| >= 3): a draw among the cottages moves
             x = side * rng.uniform(16.0, 24.0)  # behind the cottages
         h = rng.uniform(2.5, 5.0)
         b.cylinder("bark", rng.uniform(0.15, 0.3), h, (x, y, h / 2), segments=10, name="trunk")
