@@ -114,8 +114,8 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
   const vf lane_center = lane_centers<W>(x0);
   constexpr int64_t kPrefetch = 8;  // records are scattered over memory: fetch ahead of use
   for (int64_t k = begin; k < end && num_done < npix; ++k) {
-    if (k + kPrefetch < end) __builtin_prefetch(&s->splat_sorted[int64_t(s->tile_rank[k + kPrefetch]) * kSplatFloats]);
-    const float* sp = &s->splat_sorted[int64_t(s->tile_rank[k]) * kSplatFloats];
+    if (k + kPrefetch < end) __builtin_prefetch(&s->splat[int64_t(s->tile_gaussian[k + kPrefetch]) * kSplatFloats]);
+    const float* sp = &s->splat[int64_t(s->tile_gaussian[k]) * kSplatFloats];
     int px0, px1, py0, py1;  // the box is empty where alpha never reaches 1/255 (sp[9] < 0)
     box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
     if (px0 > px1) continue;
@@ -245,8 +245,8 @@ WGS_ALWAYS_INLINE void backward_tile(const RasterSettings<float>& settings, Rast
   const vf zero = splat<vf>(0.f), alpha_max = splat<vf>(float(kAlphaMax));
   constexpr int32_t kPrefetch = 8;
   for (int32_t k = kmax - 1; k >= 0; --k) {
-    if (k >= kPrefetch) __builtin_prefetch(&s->splat_sorted[int64_t(s->tile_rank[begin + k - kPrefetch]) * kSplatFloats]);
-    const float* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
+    if (k >= kPrefetch) __builtin_prefetch(&s->splat[int64_t(s->tile_gaussian[begin + k - kPrefetch]) * kSplatFloats]);
+    const float* sp = &s->splat[int64_t(s->tile_gaussian[begin + k]) * kSplatFloats];
     int px0, px1, py0, py1;
     box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
     if (px0 > px1 || py0 > py1) {

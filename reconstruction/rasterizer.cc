@@ -78,8 +78,9 @@ inline void sort_by_depth(std::vector<uint64_t>* keys) {
 
 // Builds the per-tile depth-sorted lists and, per Gaussian, the entries of its tiles. One global
 // sort of the visible Gaussians by (depth, index), then a scatter in that order: every tile list
-// comes out sorted exactly as a per-tile sort would leave it. The packed records are copied into
-// depth order as well, so that walking a tile list reads memory in increasing address order.
+// comes out sorted exactly as a per-tile sort would leave it. The lists hold Gaussian indices and the
+// kernels read the records where preprocessing wrote them: gathering the records into depth order
+// cost more in the scatter than it saved in the blend (benchmarks/README.md, 2026-11-27 evening).
 template <typename T>
 void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   const int64_t n = int64_t(s->radius.size());
@@ -132,20 +133,16 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   }
   // Slots and ranks are int32 (half the scatter's writes of int64): checked, not assumed.
   WGS_CHECK_LT(entries, int64_t(std::numeric_limits<int32_t>::max()));
-  s->tile_rank.resize(entries);
+  s->tile_gaussian.resize(entries);
   s->entry_slot.resize(entries);
-  s->splat_sorted.resize(size_t(visible) * kSplatFloats);
-  s->sorted_gaussian.resize(visible);
   // The same pass gives each entry its slot in the per-Gaussian order (the Gaussian's tiles in
-  // row-major order: entry_slot), and copies the records into depth order.
+  // row-major order: entry_slot).
   parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
     int64_t* cursor = &start[size_t(c) * num_tiles];
-    constexpr int64_t kPrefetch = 16;  // the records are gathered in depth order: fetch ahead
+    constexpr int64_t kPrefetch = 16;  // the Gaussians are visited in depth order: fetch ahead
     for (int64_t rank = lo; rank < hi; ++rank) {
       if (rank + kPrefetch < hi) {
         const int64_t ahead = int64_t((*keys)[rank + kPrefetch] & 0xffffffffu);
-        __builtin_prefetch(&s->splat[ahead * kSplatFloats]);
-        __builtin_prefetch(&s->splat[ahead * kSplatFloats + kSplatFloats - 1]);
         __builtin_prefetch(&s->rect[ahead * 4]);
         __builtin_prefetch(&s->entry_offset[ahead]);
       }
@@ -153,13 +150,9 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
       int32_t j = int32_t(s->entry_offset[gi]);
       for_each_tile(gi, [&](int t) {
         const int64_t k = cursor[t]++;
-        s->tile_rank[k] = int32_t(rank);
+        s->tile_gaussian[k] = gi;
         s->entry_slot[k] = j++;
       });
-      s->sorted_gaussian[rank] = gi;
-      const T* from = &s->splat[int64_t(gi) * kSplatFloats];
-      T* to = &s->splat_sorted[rank * kSplatFloats];
-      for (int f = 0; f < kSplatFloats; ++f) to[f] = from[f];
     }
   });
 }
@@ -190,7 +183,7 @@ void render_tiles(const RasterSettings<T>& settings, RasterState<T>* s) {
     const int64_t begin = s->tile_offset[t], end = s->tile_offset[t + 1];
     const T alpha_min = T(kAlphaMin), alpha_max = T(kAlphaMax), t_min = T(kTransmittanceMin);
     for (int64_t k = begin; k < end && num_done < npix; ++k) {
-      const T* sp = &s->splat_sorted[int64_t(s->tile_rank[k]) * kSplatFloats];
+      const T* sp = &s->splat[int64_t(s->tile_gaussian[k]) * kSplatFloats];
       const T mx = sp[0], my = sp[1], ca = sp[2], cb = sp[3], cc = sp[4], o = sp[5];
       const T r = sp[6], g = sp[7], b = sp[8];
       int px0, px1, py0, py1;
@@ -320,7 +313,7 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
     auto slot = [&](int64_t k) { return &s->entry_grad[int64_t(s->entry_slot[begin + k]) * kEntryGrads]; };
     for (int64_t k = kmax; k < end - begin; ++k) std::fill_n(slot(k), kEntryGrads, T(0));
     for (int32_t k = kmax - 1; k >= 0; --k) {
-      const T* sp = &s->splat_sorted[int64_t(s->tile_rank[begin + k]) * kSplatFloats];
+      const T* sp = &s->splat[int64_t(s->tile_gaussian[begin + k]) * kSplatFloats];
       int px0, px1, py0, py1;  // the box is empty where alpha never reaches 1/255 (sp[9] < 0)
       box_in_tile(sp, x0, x1, y0, y1, &px0, &px1, &py0, &py1);
       if (px0 > px1 || py0 > py1) {

@@ -53,17 +53,15 @@ struct RasterState {
   // opacity, r, g, b, the half extents (px) of the region where alpha can reach 1/255, the
   // largest d^T conic d there (2 ln(255 o) with a rounding margin; -1 when alpha never reaches it),
   // and the pixel box the kernels blend in (first and last column, first and last row, as floats):
-  // the alpha extents' box within the reference's 3-sigma rectangle of 16x16 tiles.
-  std::vector<T> splat;          // N x kSplatFloats
+  // the alpha extents' box within the reference's 3-sigma rectangle of 16x16 tiles. 64-byte
+  // aligned, so that a float record (16 floats) is one cache line and the kernels' one prefetch per
+  // record fetches all of it.
+  std::vector<T, AlignedAllocator<T, 64>> splat;  // N x kSplatFloats
   std::vector<int64_t> entry_offset;  // N + 1: first slot of each Gaussian in the per-Gaussian order
   // Per tile.
   std::vector<int64_t> tile_offset;   // tiles + 1
-  std::vector<int32_t> tile_rank;     // entries: depth rank of the Gaussian (index into splat_sorted
-                                      // and sorted_gaussian), each tile's range sorted by depth
-  // Visible Gaussians' records in depth order; 64-byte aligned, so that a float record (16 floats)
-  // is one cache line and the kernels' one prefetch per record fetches all of it.
-  std::vector<T, AlignedAllocator<T, 64>> splat_sorted;
-  std::vector<int32_t> sorted_gaussian;  // visible Gaussians' ids in depth order
+  std::vector<int32_t> tile_gaussian;  // entries: the Gaussian's index, each tile's range sorted by
+                                       // (depth, index)
   std::vector<int32_t> entry_slot;    // entries: the entry's slot in the per-Gaussian order (each
                                       // Gaussian's entries contiguous, its tiles in row-major order)
   // Per pixel.

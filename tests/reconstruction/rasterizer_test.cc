@@ -48,8 +48,8 @@ TEST(RasterizerTest, TileKernelEqualsPerPixelReferenceBlend) {
     const int64_t b = st.tile_offset[t], e = st.tile_offset[t + 1];
     max_list = std::max(max_list, e - b);
     for (int64_t k = b + 1; k < e; ++k)
-      ASSERT_LE(float(st.depth[st.sorted_gaussian[st.tile_rank[k - 1]]]),
-                float(st.depth[st.sorted_gaussian[st.tile_rank[k]]])) << "tile " << t;
+      ASSERT_LE(float(st.depth[st.tile_gaussian[k - 1]]),
+                float(st.depth[st.tile_gaussian[k]])) << "tile " << t;
   }
   EXPECT_GT(max_list, 50);
   int stopped_pixels = 0;
@@ -59,7 +59,7 @@ TEST(RasterizerTest, TileKernelEqualsPerPixelReferenceBlend) {
       double T = 1, rgb[3] = {0, 0, 0};
       int last = 0;
       for (int64_t k = st.tile_offset[t]; k < st.tile_offset[t + 1]; ++k) {
-        const int gi = st.sorted_gaussian[st.tile_rank[k]];
+        const int gi = st.tile_gaussian[k];
         const double* box = &st.splat[int64_t(gi) * kSplatFloats + 12];
         if (x < box[0] || x > box[1] || y < box[2] || y > box[3]) continue;
         const double alpha = reference_alpha(st, gi, x, y);
