@@ -56,24 +56,51 @@ inline int64_t num_tile_entries(const RasterState<T>& s, int64_t i) {
 
 // Sorts the (depth bits << 32 | index) keys, which arrive in increasing index order: a stable LSD
 // radix sort on the 32 depth bits (three passes of 11 bits) keeps that order among equal depths, so
-// the result is exactly std::sort's of the 64-bit keys, in linear time.
+// the result is exactly std::sort's of the 64-bit keys, in linear time. Each pass counts per chunk
+// of the input and scatters each chunk from its own starts (buckets in order, chunks in order within
+// a bucket): the serial stable pass's result, whatever the thread count. A pass whose digit is the
+// same for every key would not move anything and is skipped.
 inline void sort_by_depth(std::vector<uint64_t>* keys) {
   constexpr int kBits = 11, kBuckets = 1 << kBits;
-  static thread_local std::vector<uint64_t> tmp;
-  tmp.resize(keys->size());
+  constexpr int64_t kSortChunk = 8192;
+  static thread_local std::vector<uint64_t> tmp_buffer;
+  static thread_local std::vector<int64_t> start_buffer;
+  // By reference: a thread_local named inside the lambdas would be each worker's own.
+  std::vector<uint64_t>& tmp = tmp_buffer;
+  std::vector<int64_t>& start = start_buffer;
+  const int64_t n = int64_t(keys->size());
+  const int64_t chunks = num_chunks(0, n, kSortChunk);
+  tmp.resize(size_t(n));
+  start.resize(size_t(chunks) * kBuckets);
   uint64_t* src = keys->data();
   uint64_t* dst = tmp.data();
-  const size_t n = keys->size();
   for (int pass = 0; pass < 3; ++pass) {
     const int shift = 32 + pass * kBits;
-    size_t count[kBuckets + 1] = {};
-    for (size_t i = 0; i < n; ++i) ++count[((src[i] >> shift) & (kBuckets - 1)) + 1];
-    for (int b = 0; b < kBuckets; ++b) count[b + 1] += count[b];
-    for (size_t i = 0; i < n; ++i) dst[count[(src[i] >> shift) & (kBuckets - 1)]++] = src[i];
+    auto digit = [shift](uint64_t key) { return int((key >> shift) & (kBuckets - 1)); };
+    parallel_for_chunks(0, n, kSortChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+      int64_t* count = &start[size_t(c) * kBuckets];
+      std::fill_n(count, kBuckets, 0);
+      for (int64_t i = lo; i < hi; ++i) ++count[digit(src[i])];
+    });
+    int64_t run = 0;
+    bool one_bucket = false;
+    for (int b = 0; b < kBuckets; ++b) {
+      const int64_t bucket_begin = run;
+      for (int64_t c = 0; c < chunks; ++c) {
+        const int64_t count = start[size_t(c) * kBuckets + b];
+        start[size_t(c) * kBuckets + b] = run;
+        run += count;
+      }
+      one_bucket |= run - bucket_begin == n;
+    }
+    if (one_bucket) continue;
+    parallel_for_chunks(0, n, kSortChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+      int64_t* cursor = &start[size_t(c) * kBuckets];
+      for (int64_t i = lo; i < hi; ++i) dst[cursor[digit(src[i])]++] = src[i];
+    });
     std::swap(src, dst);
   }
-  // Three passes: the sorted keys are in tmp.
-  keys->swap(tmp);
+  if (src != keys->data()) keys->swap(tmp);
 }
 
 // Builds the per-tile depth-sorted lists and, per Gaussian, the entries of its tiles. One global
@@ -85,18 +112,43 @@ template <typename T>
 void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   const int64_t n = int64_t(s->radius.size());
   const int num_tiles = s->tiles_x * s->tiles_y;
-  s->entry_offset.assign(n + 1, 0);
-  keys->clear();
-  for (int64_t i = 0; i < n; ++i) {
-    const int64_t count = num_tile_entries(*s, i);
-    s->entry_offset[i + 1] = s->entry_offset[i] + count;
-    if (count == 0) continue;
-    // Depth is > 0.2, so the float bit pattern orders like the value; ties go to the lower index.
-    const float d = float(s->depth[i]);
-    uint32_t bits;
-    std::memcpy(&bits, &d, 4);
-    keys->push_back((uint64_t(bits) << 32) | uint64_t(uint32_t(i)));
+  // Entry offsets and the visible Gaussians' keys in index order, in two parallel passes over
+  // chunks: counts per chunk, then each chunk writes from its prefix.
+  s->entry_offset.resize(n + 1);
+  s->entry_offset[0] = 0;
+  const int64_t gaussian_chunks = num_chunks(0, n, kGaussianChunk);
+  static thread_local std::vector<int64_t> chunk_sums_buffer;
+  std::vector<int64_t>& chunk_sums = chunk_sums_buffer;  // entries, visible Gaussians per chunk
+  chunk_sums.assign(size_t(gaussian_chunks + 1) * 2, 0);
+  parallel_for_chunks(0, n, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+    int64_t entries = 0, visible = 0;
+    for (int64_t i = lo; i < hi; ++i) {
+      const int64_t count = num_tile_entries(*s, i);
+      s->entry_offset[i + 1] = count;  // the count for now, the offset below
+      entries += count;
+      visible += count > 0;
+    }
+    chunk_sums[size_t(c + 1) * 2] = entries;
+    chunk_sums[size_t(c + 1) * 2 + 1] = visible;
+  });
+  for (int64_t c = 0; c < gaussian_chunks; ++c) {
+    chunk_sums[size_t(c + 1) * 2] += chunk_sums[size_t(c) * 2];
+    chunk_sums[size_t(c + 1) * 2 + 1] += chunk_sums[size_t(c) * 2 + 1];
   }
+  keys->resize(size_t(chunk_sums[size_t(gaussian_chunks) * 2 + 1]));
+  parallel_for_chunks(0, n, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+    int64_t offset = chunk_sums[size_t(c) * 2], slot = chunk_sums[size_t(c) * 2 + 1];
+    for (int64_t i = lo; i < hi; ++i) {
+      const int64_t count = s->entry_offset[i + 1];
+      s->entry_offset[i + 1] = offset += count;
+      if (count == 0) continue;
+      // Depth is > 0.2, so the float bit pattern orders like the value; ties go to the lower index.
+      const float d = float(s->depth[i]);
+      uint32_t bits;
+      std::memcpy(&bits, &d, 4);
+      (*keys)[size_t(slot++)] = (uint64_t(bits) << 32) | uint64_t(uint32_t(i));
+    }
+  });
   sort_by_depth(keys);
   const int64_t visible = int64_t(keys->size());
   const int64_t entries = s->entry_offset[n];
