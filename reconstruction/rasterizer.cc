@@ -41,11 +41,6 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
   });
 }
 
-// Tiles of Gaussian i's rectangle that get an entry: bit b (row-major in the rectangle) of its mask.
-template <typename T>
-inline bool has_entry(const RasterState<T>& s, int64_t i, int b, int area) {
-  return area > kMaskTiles || ((s.tile_mask[i] >> b) & 1);
-}
 template <typename T>
 inline int64_t num_tile_entries(const RasterState<T>& s, int64_t i) {
   const int32_t* r = &s.rect[i * 4];
@@ -156,12 +151,21 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   // per tile, the counts become per-(chunk, tile) start positions (tile by tile, chunks in order),
   // and each chunk scatters its Gaussians in depth order from its own starts: the same lists as one
   // serial scatter in depth order, whatever the thread count.
+  // A rectangle of at most kMaskTiles tiles visits its mask's set bits (row-major, so the same
+  // tiles in the same order as the loops below): one loop whose trip count is the entry count
+  // instead of a loop per row and a test per tile (fewer mispredicted branches).
   auto for_each_tile = [&](int32_t gi, auto&& fn) {
     const int32_t* r = &s->rect[int64_t(gi) * 4];
-    const int area = (r[2] - r[0]) * (r[3] - r[1]);
-    for (int ty = r[1], b = 0; ty < r[3]; ++ty)
-      for (int tx = r[0]; tx < r[2]; ++tx, ++b)
-        if (has_entry(*s, gi, b, area)) fn(ty * s->tiles_x + tx);
+    const int w = r[2] - r[0], area = w * (r[3] - r[1]);
+    if (area <= kMaskTiles) {
+      for (uint64_t m = s->tile_mask[gi]; m != 0; m &= m - 1) {
+        const int b = __builtin_ctzll(m);
+        fn((r[1] + b / w) * s->tiles_x + r[0] + b % w);
+      }
+      return;
+    }
+    for (int ty = r[1]; ty < r[3]; ++ty)
+      for (int tx = r[0]; tx < r[2]; ++tx) fn(ty * s->tiles_x + tx);
   };
   const int64_t chunks = num_chunks(0, visible, kGaussianChunk);
   // The caller's buffer, by reference: a thread_local named inside the lambdas would be each worker's own.
