@@ -10,6 +10,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace weathergs::recon {
 
@@ -51,11 +53,60 @@ constexpr double kShC3[7] = {-0.5900435899266435, 2.890611442640554, -0.45704579
                              0.3731763325901154,  -0.4570457994644658, 1.445305721320277,
                              -0.5900435899266435};
 
+// exp and log of the per-Gaussian math in float, written with plain float operations (no libm, no
+// fused multiply-add) so that the SIMD preprocessing (preprocess_simd.cc) does the same operations
+// lane by lane in vector registers; libm's expf and logf are one call per lane (48 calls per 8
+// Gaussians took ~20 % of the preprocessing, benchmarks/README.md). exp: Cephes' expf (reduction
+// x = n ln 2 + r with ln 2 split in two, e^r = 1 + r + r^2 p(r), p of degree 5), x clamped to
+// [-87, 88] so that 2^n is a normal float; log: Cephes' logf (mantissa in [sqrt(1/2), sqrt(2)),
+// degree-8 polynomial), for positive normal x. Both within 2 ulp of the exact values (test
+// GaussianMathTest.FloatExpAndLogAreAccurate); a NaN gives NaN. double: std::exp and std::log (the
+// finite-difference tests).
+inline float model_exp(float x) {
+  if (x != x) return x;
+  x = std::min(std::max(x, -87.0f), 88.0f);
+  const float t = x * 1.44269504088896341f + 0.5f;
+  int n = int(t);  // floor(t): truncation, one less where that rounded up (t < 0)
+  n -= float(n) > t ? 1 : 0;
+  const float z = float(n);
+  const float r = (x - z * 0.693359375f) - z * -2.12194440e-4f;
+  const float r2 = r * r;
+  float p = 1.9875691500e-4f;
+  for (float c : {1.3981999507e-3f, 8.3334519073e-3f, 4.1665795894e-2f, 1.6666665459e-1f, 5.0000001201e-1f}) p = p * r + c;
+  const float e_r = (p * r2 + r) + 1.0f;
+  const int32_t bits = (n + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, 4);
+  return e_r * scale;
+}
+inline double model_exp(double x) { return std::exp(x); }
+
+inline float model_log(float x) {
+  int32_t bits;
+  std::memcpy(&bits, &x, 4);
+  int e = ((bits >> 23) & 0xff) - 126;  // x = m 2^e, m in [0.5, 1)
+  const int32_t m_bits = (bits & 0x007fffff) | 0x3f000000;
+  float m;
+  std::memcpy(&m, &m_bits, 4);
+  const bool low = m < 0.707106781186547524f;
+  e -= low ? 1 : 0;
+  const float f = low ? (m + m) - 1.0f : m - 1.0f;
+  const float f2 = f * f;
+  float p = 7.0376836292e-2f;
+  for (float c : {-1.1514610310e-1f, 1.1676998740e-1f, -1.2420140846e-1f, 1.4249322787e-1f, -1.6668057665e-1f,
+                  2.0000714765e-1f, -2.4999993993e-1f, 3.3333331174e-1f})
+    p = p * f + c;
+  const float fe = float(e);
+  float y = ((p * f) * f2 + fe * -2.12194440e-4f) + -0.5f * f2;
+  return (f + y) + fe * 0.693359375f;
+}
+inline double model_log(double x) { return std::log(x); }
+
 template <typename T>
 inline T sigmoid(T x) {
   // Two branches so that exp never overflows for logits of either sign.
-  if (x >= T(0)) return T(1) / (T(1) + std::exp(-x));
-  T e = std::exp(x);
+  if (x >= T(0)) return T(1) / (T(1) + model_exp(-x));
+  T e = model_exp(x);
   return e / (T(1) + e);
 }
 
@@ -95,7 +146,8 @@ inline Vec4<T> quat_to_rotmat_vjp(const Vec4<T>& q_raw, const Mat3<T>& v_r) {
 // ---- 3D covariance Sigma = R diag(s^2) R^T with s = exp(log_scale) ----
 template <typename T>
 inline Mat3<T> covariance_3d(const Vec3<T>& log_scale, const Vec4<T>& q) {
-  Mat3<T> m = quat_to_rotmat(q) * log_scale.array().exp().matrix().asDiagonal();
+  const Vec3<T> s(model_exp(log_scale[0]), model_exp(log_scale[1]), model_exp(log_scale[2]));
+  Mat3<T> m = quat_to_rotmat(q) * s.asDiagonal();
   return m * m.transpose();
 }
 
@@ -103,7 +155,7 @@ inline Mat3<T> covariance_3d(const Vec3<T>& log_scale, const Vec4<T>& q) {
 template <typename T>
 inline void covariance_3d_vjp(const Vec3<T>& log_scale, const Vec4<T>& q, const Mat3<T>& v_sigma,
                               Vec3<T>* v_log_scale, Vec4<T>* v_q) {
-  Vec3<T> s = log_scale.array().exp().matrix();
+  const Vec3<T> s(model_exp(log_scale[0]), model_exp(log_scale[1]), model_exp(log_scale[2]));
   Mat3<T> r = quat_to_rotmat(q);
   Mat3<T> m = r * s.asDiagonal();
   Mat3<T> v_m = (v_sigma + v_sigma.transpose()) * m;  // d(M M^T) with a symmetric gradient

@@ -5,9 +5,10 @@
 // does that template's IEEE operations in its order. Eigen sums a fixed-size product's three terms
 // as a0 + (a1 + a2) and a Vector4f's squared norm as (q0^2 + q2^2) + (q1^2 + q3^2) (its SSE
 // reduction); the formulas below spell those orders out, with the Jacobian's structural zeros kept
-// (0 * R(k, j) may be -0, which decides the sign of a zero sum). exp of the log scales runs through
-// libm lane by lane, as Eigen's array exp does. The library compiles with -ffp-contract=off (no
-// fused multiply-add). Test RasterizerTest.SimdPreprocessEqualsScalar compares every output.
+// (0 * R(k, j) may be -0, which decides the sign of a zero sum). exp and log are model_exp and
+// model_log (gaussian_math.h), their operations in vector registers (exp_v, log_v). The library
+// compiles with -ffp-contract=off (no fused multiply-add). Test
+// RasterizerTest.SimdPreprocessEqualsScalar compares every output.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -68,6 +69,54 @@ WGS_ALWAYS_INLINE void transpose(typename Lanes<W>::f* r) {
       r[c + 4] = __builtin_shufflevector(u[c], u[c + 4], 4, 5, 6, 7, 12, 13, 14, 15);
     }
   }
+}
+
+// model_exp (gaussian_math.h), lane by lane the same operations.
+template <int W>
+WGS_ALWAYS_INLINE typename Lanes<W>::f exp_v(typename Lanes<W>::f x) {
+  using vf = typename Lanes<W>::f;
+  using vi = typename Lanes<W>::i;
+  const vi nan = x != x;
+  const vf lo = vf{} - 87.0f, hi = vf{} + 88.0f;
+  const vf c = x < lo ? lo : (hi < x ? hi : x);  // std::min(std::max(x, -87), 88) for a non-NaN x
+  const vf t = c * 1.44269504088896341f + 0.5f;
+  vi n = __builtin_convertvector(nan ? vf{} : t, vi);
+  n += __builtin_convertvector(n, vf) > t;  // -1 where truncation rounded up
+  const vf z = __builtin_convertvector(n, vf);
+  const vf r = (c - z * 0.693359375f) - z * -2.12194440e-4f;
+  const vf r2 = r * r;
+  vf p = vf{} + 1.9875691500e-4f;
+  for (float k : {1.3981999507e-3f, 8.3334519073e-3f, 4.1665795894e-2f, 1.6666665459e-1f, 5.0000001201e-1f})
+    p = p * r + k;
+  const vf e_r = (p * r2 + r) + 1.0f;
+  const vi bits = (n + 127) << 23;
+  vf scale;
+  std::memcpy(&scale, &bits, sizeof(vf));
+  return nan ? x : e_r * scale;
+}
+
+// model_log (gaussian_math.h), lane by lane the same operations.
+template <int W>
+WGS_ALWAYS_INLINE typename Lanes<W>::f log_v(typename Lanes<W>::f x) {
+  using vf = typename Lanes<W>::f;
+  using vi = typename Lanes<W>::i;
+  vi bits;
+  std::memcpy(&bits, &x, sizeof(vf));
+  vi e = ((bits >> 23) & 0xff) - 126;
+  const vi m_bits = (bits & 0x007fffff) | 0x3f000000;
+  vf m;
+  std::memcpy(&m, &m_bits, sizeof(vf));
+  const vi low = m < 0.707106781186547524f;
+  e += low;  // -1 where low
+  const vf f = low ? (m + m) - 1.0f : m - 1.0f;
+  const vf f2 = f * f;
+  vf p = vf{} + 7.0376836292e-2f;
+  for (float k : {-1.1514610310e-1f, 1.1676998740e-1f, -1.2420140846e-1f, 1.4249322787e-1f, -1.6668057665e-1f,
+                  2.0000714765e-1f, -2.4999993993e-1f, 3.3333331174e-1f})
+    p = p * f + k;
+  const vf fe = __builtin_convertvector(e, vf);
+  const vf y = ((p * f) * f2 + fe * -2.12194440e-4f) + -0.5f * f2;
+  return (f + y) + fe * 0.693359375f;
 }
 
 // tile_floor_index, lane by lane.
@@ -144,8 +193,7 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   const auto in_front = z > float(kNearPlane);
 
   // covariance_3d: M = R(q) diag(exp(log_scale)), Sigma = M M^T.
-  auto exp_lane = [](float v) { return std::exp(v); };
-  sx = lanewise(sx, exp_lane); sy = lanewise(sy, exp_lane); sz = lanewise(sz, exp_lane);
+  sx = exp_v<W>(sx); sy = exp_v<W>(sy); sz = exp_v<W>(sz);
   const vf qn = lanewise((qw * qw + qy * qy) + (qx * qx + qz * qz), [](float v) { return std::sqrt(v); });
   const auto q_ok = qn >= float(kMinQuatNorm);
   const vf w = qw / qn, x = qx / qn, y = qy / qn, zq = qz / qn;
@@ -259,11 +307,14 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   const vi x1 = tile_floor_v<W>(cx0 + radius + float(kReferenceTile - 1), gx);
   const vi y1 = tile_floor_v<W>(cy0 + radius + float(kReferenceTile - 1), gy);
   ok &= ((x1 - x0) * (y1 - y0) != 0) & finite(rgb[0]) & finite(rgb[1]) & finite(rgb[2]);
-  vf opacity, q_max;
-  for (int l = 0; l < W; ++l) {
-    opacity[l] = sigmoid(g.opacity_logit[lane[l]]);
-    q_max[l] = alpha_q_max(opacity[l]);
-  }
+  // sigmoid and alpha_q_max (-1 where the opacity is below 1/255 or NaN).
+  vf logit;
+  for (int l = 0; l < W; ++l) logit[l] = g.opacity_logit[lane[l]];
+  const vi positive = logit >= 0.0f;
+  const vf e = exp_v<W>(positive ? -logit : logit);
+  const vf opacity = positive ? 1.0f / (1.0f + e) : e / (1.0f + e);
+  const vi has_alpha = opacity >= float(kAlphaMin);
+  const vf q_max = has_alpha ? 2.0f * log_v<W>(has_alpha ? 255.0f * opacity : vf{} + 1.0f) : vf{} - 1.0f;
   const auto no_alpha = q_max < 0.0f;
   const vf ext_x = no_alpha ? vf{} - 1.0f : lanewise(q_max * cov_a, [](float v) { return std::sqrt(v); }) + 1.0f;
   const vf ext_y = no_alpha ? vf{} - 1.0f : lanewise(q_max * cov_c, [](float v) { return std::sqrt(v); }) + 1.0f;

@@ -63,7 +63,7 @@ inline double blend_exp(double x) { return std::exp(x); }
 template <typename T>
 inline T alpha_q_max(T opacity) {
   if (!(opacity >= T(kAlphaMin))) return T(-1);
-  return T(2) * std::log(T(255) * opacity);
+  return T(2) * model_log(T(255) * opacity);
 }
 
 // Half extent (px), along an axis with 2D variance cov_diag, of the region where a Gaussian's alpha

@@ -176,6 +176,46 @@ TEST(RasterizerTest, BlendExpIsAccurate) {
   std::printf("blend exp: max relative error %.2e on [-5.6, 0], %.2e on [-87, 0]\n", worst_blend, worst_full);
 }
 
+// model_exp and model_log (gaussian_math.h) against double libm, in units of the float spacing at
+// the exact value (ulp). Cephes documents ~1 ulp for both on these ranges; 2 leaves room for the
+// double rounding of the reference. Ranges: every float log scale and logit the trainer can reach
+// (exp of -87..88) and the log of 255 x opacity (1 to 255), plus the whole normal range for log.
+TEST(RasterizerTest, FloatExpAndLogAreAccurate) {
+  constexpr double kMaxUlp = 2.0;
+  auto ulp_error = [](float got, double ref) {
+    int exponent;
+    std::frexp(ref, &exponent);
+    return std::abs(double(got) - ref) / std::ldexp(1.0, std::max(exponent, -125) - 24);
+  };
+  double worst_exp = 0, worst_log = 0;
+  constexpr int kSamples = 2000000;
+  for (int i = 0; i <= kSamples; ++i) {
+    const float x = -87.f + 175.f * float(i) / float(kSamples);
+    worst_exp = std::max(worst_exp, ulp_error(model_exp(x), std::exp(double(x))));
+  }
+  for (int i = 0; i <= kSamples; ++i) {
+    const float x = 1.f + 254.f * float(i) / float(kSamples);
+    worst_log = std::max(worst_log, ulp_error(model_log(x), std::log(double(x))));
+  }
+  for (int k = -126; k < 128; ++k)
+    for (float m : {1.f, 1.2345f, 1.41421f, 1.5f, 1.999f}) {
+      const float x = std::ldexp(m, k);
+      if (x == 1.f) continue;  // log 1 = 0: no ulp scale (checked exactly below)
+      worst_log = std::max(worst_log, ulp_error(model_log(x), std::log(double(x))));
+    }
+  EXPECT_LE(worst_exp, kMaxUlp);
+  EXPECT_LE(worst_log, kMaxUlp);
+  EXPECT_EQ(model_exp(0.f), 1.f);
+  EXPECT_EQ(model_log(1.f), 0.f);
+  EXPECT_GT(model_exp(-1000.f), 0.f);  // clamped at -87 and 88: finite, never 0
+  EXPECT_TRUE(std::isfinite(model_exp(1000.f)));
+  EXPECT_TRUE(std::isnan(model_exp(std::numeric_limits<float>::quiet_NaN())));
+  EXPECT_EQ(sigmoid(0.f), 0.5f);
+  EXPECT_EQ(sigmoid(-200.f), sigmoid(-87.f));  // no overflow or NaN at extreme logits
+  EXPECT_EQ(sigmoid(200.f), 1.f);
+  std::printf("model exp: max error %.2f ulp on [-87, 88]; model log: %.2f ulp\n", worst_exp, worst_log);
+}
+
 TEST(RasterizerTest, FloatMatchesDouble) {
   const Camera c = front_camera(64, 48);
   const GaussianSet<double> gd = random_gaussians<double>(300, 22, 1.0, 0.08, 0.2);
