@@ -87,8 +87,17 @@ struct Phases {
   }
 };
 
+// The training forward: everything the backward pass reads.
 void BM_Forward(benchmark::State& state) {
   Phases p(int(state.range(0)), int(state.range(1)), int(state.range(2)));
+  for (auto _ : state) rasterize_forward(p.g, p.cam, p.rs, &p.st);
+  state.counters["entries"] = double(p.st.num_entries());
+}
+
+// A render (`weathergs render`, test views): the image only (RasterOutputs::kImage), same bits.
+void BM_Render(benchmark::State& state) {
+  Phases p(int(state.range(0)), int(state.range(1)), int(state.range(2)));
+  p.rs.outputs = RasterOutputs::kImage;
   for (auto _ : state) rasterize_forward(p.g, p.cam, p.rs, &p.st);
   state.counters["entries"] = double(p.st.num_entries());
 }
@@ -112,6 +121,7 @@ void sizes(benchmark::internal::Benchmark* b) {
 
 BENCHMARK(BM_TrainIteration)->Apply(sizes);
 BENCHMARK(BM_Forward)->Apply(sizes);
+BENCHMARK(BM_Render)->Apply(sizes);
 BENCHMARK(BM_Backward)->Apply(sizes);
 BENCHMARK(BM_Loss)->Args({300, 200, 0})->Args({600, 400, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
 

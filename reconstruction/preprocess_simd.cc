@@ -154,9 +154,10 @@ WGS_ALWAYS_INLINE uint64_t tile_mask_v(const float* sp, float inv_ca, float inv_
     x_lo = x_lo + 0.5f - sp[0]; x_hi = x_hi - 0.5f - sp[0];
     y_lo = y_lo + 0.5f - sp[1]; y_hi = y_hi - 0.5f - sp[1];
     const vi inside = (x_lo <= 0.0f) & (x_hi >= 0.0f) & (y_lo <= 0.0f) & (y_hi >= 0.0f);
-    auto q = [&](vf dx, vf dy) { return ca * dx * dx + 2.0f * cb * dx * dy + cc * dy * dy; };
-    auto clamp = [](vf v, vf lo, vf hi) { return v < lo ? lo : (hi < v ? hi : v); };
-    auto vmin = [](vf a, vf b) { return b < a ? b : a; };
+    // Inlined by force: out of line they would pass 32-byte vectors through memory (-Wpsabi).
+    auto q = [&](vf dx, vf dy) __attribute__((always_inline)) { return ca * dx * dx + 2.0f * cb * dx * dy + cc * dy * dy; };
+    auto clamp = [](vf v, vf lo, vf hi) __attribute__((always_inline)) { return v < lo ? lo : (hi < v ? hi : v); };
+    auto vmin = [](vf a, vf b) __attribute__((always_inline)) { return b < a ? b : a; };
     vf q_min = vf{} + std::numeric_limits<float>::infinity();
     q_min = vmin(q_min, q(x_lo, clamp(-cb * x_lo * inv_cc, y_lo, y_hi)));
     q_min = vmin(q_min, q(x_hi, clamp(-cb * x_hi * inv_cc, y_lo, y_hi)));
@@ -169,7 +170,9 @@ WGS_ALWAYS_INLINE uint64_t tile_mask_v(const float* sp, float inv_ca, float inv_
   return mask;
 }
 
-template <int W>
+// kTraining: also the per-Gaussian values only the backward pass reads (mean2d, cov2d, conic,
+// opacity, color, clamped).
+template <int W, bool kTraining>
 WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree,
                                         RasterState<float>* s, int64_t i0, int count) {
   using vf = typename Lanes<W>::f;
@@ -298,7 +301,7 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   const vf radius = lanewise(3.0f * lanewise(lambda, [](float v) { return std::sqrt(v); }),
                              [](float v) { return std::ceil(v); });
   const vf con_a = cov_c / det, con_b = -cov_b / det, con_c = cov_a / det;
-  auto finite = [](vf v) { return v - v == 0.0f; };
+  auto finite = [](vf v) __attribute__((always_inline)) { return v - v == 0.0f; };
   auto ok = in_front & (det > 0.0f) & finite(mean_x) & finite(mean_y) & finite(cov_a) & finite(cov_b) &
             finite(cov_c) & finite(radius) & finite(con_a) & finite(con_b) & finite(con_c);
   const vf cx0 = mean_x - 0.5f, cy0 = mean_y - 0.5f;
@@ -326,12 +329,14 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
     clear_gaussian(s, i);
     if (!ok[l]) continue;
     s->radius[i] = int32_t(std::min<float>(radius[l], float(std::numeric_limits<int32_t>::max() / 2)));
-    s->mean2d[i * 2] = mean_x[l]; s->mean2d[i * 2 + 1] = mean_y[l];
-    s->cov2d[i * 3] = cov_a[l]; s->cov2d[i * 3 + 1] = cov_b[l]; s->cov2d[i * 3 + 2] = cov_c[l];
-    s->conic[i * 3] = con_a[l]; s->conic[i * 3 + 1] = con_b[l]; s->conic[i * 3 + 2] = con_c[l];
-    s->opacity[i] = opacity[l];
-    for (int ch = 0; ch < 3; ++ch) s->color[i * 3 + ch] = rgb[ch][l];
-    s->clamped[i] = uint8_t(clamped_bits[l]);
+    if constexpr (kTraining) {
+      s->mean2d[i * 2] = mean_x[l]; s->mean2d[i * 2 + 1] = mean_y[l];
+      s->cov2d[i * 3] = cov_a[l]; s->cov2d[i * 3 + 1] = cov_b[l]; s->cov2d[i * 3 + 2] = cov_c[l];
+      s->conic[i * 3] = con_a[l]; s->conic[i * 3 + 1] = con_b[l]; s->conic[i * 3 + 2] = con_c[l];
+      s->opacity[i] = opacity[l];
+      for (int ch = 0; ch < 3; ++ch) s->color[i * 3 + ch] = rgb[ch][l];
+      s->clamped[i] = uint8_t(clamped_bits[l]);
+    }
     s->depth[i] = z[l];
     float* sp = &s->splat[i * kSplatFloats];
     sp[0] = mean_x[l]; sp[1] = mean_y[l]; sp[2] = con_a[l]; sp[3] = con_b[l]; sp[4] = con_c[l];
@@ -351,19 +356,24 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
 
 template <int W>
 WGS_ALWAYS_INLINE void preprocess_range(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree,
-                                        RasterState<float>* s, int64_t lo, int64_t hi) {
-  for (int64_t i = lo; i < hi; i += W) preprocess_block<W>(g, cam, degree, s, i, int(std::min<int64_t>(W, hi - i)));
+                                        bool training, RasterState<float>* s, int64_t lo, int64_t hi) {
+  for (int64_t i = lo; i < hi; i += W) {
+    const int count = int(std::min<int64_t>(W, hi - i));
+    if (training) preprocess_block<W, true>(g, cam, degree, s, i, count);
+    else preprocess_block<W, false>(g, cam, degree, s, i, count);
+  }
 }
 
-void preprocess_w4(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree, RasterState<float>* s,
-                   int64_t lo, int64_t hi) {
-  preprocess_range<4>(g, cam, degree, s, lo, hi);
+void preprocess_w4(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree, bool training,
+                   RasterState<float>* s, int64_t lo, int64_t hi) {
+  preprocess_range<4>(g, cam, degree, training, s, lo, hi);
 }
 #if defined(__x86_64__) && defined(__GNUC__)
 #define WGS_WIDE_PREPROCESS 1
 __attribute__((target("avx2"))) void preprocess_w8(const GaussianSet<float>& g, const RasterCamera<float>& cam,
-                                                   int degree, RasterState<float>* s, int64_t lo, int64_t hi) {
-  preprocess_range<8>(g, cam, degree, s, lo, hi);
+                                                   int degree, bool training, RasterState<float>* s, int64_t lo,
+                                                   int64_t hi) {
+  preprocess_range<8>(g, cam, degree, training, s, lo, hi);
 }
 #endif
 
@@ -372,11 +382,12 @@ __attribute__((target("avx2"))) void preprocess_w8(const GaussianSet<float>& g, 
 void preprocess_simd(const GaussianSet<float>& g, const RasterCamera<float>& cam, const RasterSettings<float>& settings,
                      RasterState<float>* s) {
   const int width = tile_kernel_width();
+  const bool training = settings.outputs == RasterOutputs::kTraining;
   parallel_for_chunks(0, int64_t(g.size()), kGaussianChunk, [&](int64_t, int64_t lo, int64_t hi) {
 #ifdef WGS_WIDE_PREPROCESS
-    if (width == 8) return preprocess_w8(g, cam, settings.sh_degree, s, lo, hi);
+    if (width == 8) return preprocess_w8(g, cam, settings.sh_degree, training, s, lo, hi);
 #endif
-    preprocess_w4(g, cam, settings.sh_degree, s, lo, hi);
+    preprocess_w4(g, cam, settings.sh_degree, training, s, lo, hi);
   });
 }
 

@@ -80,7 +80,9 @@ WGS_ALWAYS_INLINE typename Lanes<W>::f lane_centers(int x0) {
   return c;
 }
 
-template <int W>
+// kTraining: also each pixel's final transmittance and contributor count (for the backward pass);
+// the image is the same either way.
+template <int W, bool kTraining>
 WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, RasterState<float>* s, int64_t t) {
   using vf = typename Lanes<W>::f;
   using vi = typename Lanes<W>::i;
@@ -164,7 +166,7 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
       store(&cg[p], load<vf>(&cg[p]) + g * w);
       store(&cb_[p], load<vf>(&cb_[p]) + b * w);
       store(&trans[p], add ? test_t : tp);
-      store(&last[p], add ? contributor : load<vi>(&last[p]));
+      if constexpr (kTraining) store(&last[p], add ? contributor : load<vi>(&last[p]));
       store(&done[p], load<vi>(&done[p]) | stop);
       stopped -= stop;
     }
@@ -182,8 +184,10 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
       s->image[pix * 3] = cr[p] + trans[p] * settings.background[0];
       s->image[pix * 3 + 1] = cg[p] + trans[p] * settings.background[1];
       s->image[pix * 3 + 2] = cb_[p] + trans[p] * settings.background[2];
-      s->final_transmittance[pix] = trans[p];
-      s->n_contrib[pix] = last[p];
+      if constexpr (kTraining) {
+        s->final_transmittance[pix] = trans[p];
+        s->n_contrib[pix] = last[p];
+      }
     }
 }
 
@@ -335,7 +339,10 @@ bool has_background(const RasterSettings<float>& st) {
   return st.background[0] != 0.f || st.background[1] != 0.f || st.background[2] != 0.f;
 }
 
-void render_w4(const RasterSettings<float>& st, RasterState<float>* s, int64_t t) { render_tile<4>(st, s, t); }
+void render_w4(const RasterSettings<float>& st, RasterState<float>* s, int64_t t) {
+  if (st.outputs == RasterOutputs::kTraining) render_tile<4, true>(st, s, t);
+  else render_tile<4, false>(st, s, t);
+}
 
 void backward_w4(const RasterSettings<float>& st, RasterState<float>* s, const std::vector<float>& v, int64_t t) {
   if (has_background(st)) backward_tile<4, true>(st, s, v, t);
@@ -344,7 +351,8 @@ void backward_w4(const RasterSettings<float>& st, RasterState<float>* s, const s
 #if defined(__x86_64__) && defined(__GNUC__)
 #define WGS_WIDE_KERNELS 1
 __attribute__((target("avx2"))) void render_w8(const RasterSettings<float>& st, RasterState<float>* s, int64_t t) {
-  render_tile<8>(st, s, t);
+  if (st.outputs == RasterOutputs::kTraining) render_tile<8, true>(st, s, t);
+  else render_tile<8, false>(st, s, t);
 }
 __attribute__((target("avx2"))) void backward_w8(const RasterSettings<float>& st, RasterState<float>* s,
                                                  const std::vector<float>& v, int64_t t) {

@@ -104,7 +104,7 @@ inline void sort_by_depth(std::vector<uint64_t>* keys) {
 // kernels read the records where preprocessing wrote them: gathering the records into depth order
 // cost more in the scatter than it saved in the blend (benchmarks/README.md, 2026-11-27 evening).
 template <typename T>
-void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
+void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slots) {
   const int64_t n = int64_t(s->radius.size());
   const int num_tiles = s->tiles_x * s->tiles_y;
   // Entry offsets and the visible Gaussians' keys in index order, in two parallel passes over
@@ -190,27 +190,32 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys) {
   // Slots and ranks are int32 (half the scatter's writes of int64): checked, not assumed.
   WGS_CHECK_LT(entries, int64_t(std::numeric_limits<int32_t>::max()));
   s->tile_gaussian.resize(entries);
-  s->entry_slot.resize(entries);
+  if (entry_slots) s->entry_slot.resize(entries);
   // The same pass gives each entry its slot in the per-Gaussian order (the Gaussian's tiles in
-  // row-major order: entry_slot).
-  parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
-    int64_t* cursor = &start[size_t(c) * num_tiles];
-    constexpr int64_t kPrefetch = 16;  // the Gaussians are visited in depth order: fetch ahead
-    for (int64_t rank = lo; rank < hi; ++rank) {
-      if (rank + kPrefetch < hi) {
-        const int64_t ahead = int64_t((*keys)[rank + kPrefetch] & 0xffffffffu);
-        __builtin_prefetch(&s->rect[ahead * 4]);
-        __builtin_prefetch(&s->entry_offset[ahead]);
+  // row-major order: entry_slot), which only the backward pass reads.
+  auto scatter = [&](auto with_slots) {
+    constexpr bool kSlots = decltype(with_slots)::value;
+    parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
+      int64_t* cursor = &start[size_t(c) * num_tiles];
+      constexpr int64_t kPrefetch = 16;  // the Gaussians are visited in depth order: fetch ahead
+      for (int64_t rank = lo; rank < hi; ++rank) {
+        if (rank + kPrefetch < hi) {
+          const int64_t ahead = int64_t((*keys)[rank + kPrefetch] & 0xffffffffu);
+          __builtin_prefetch(&s->rect[ahead * 4]);
+          if constexpr (kSlots) __builtin_prefetch(&s->entry_offset[ahead]);
+        }
+        const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
+        [[maybe_unused]] int32_t j = kSlots ? int32_t(s->entry_offset[gi]) : 0;
+        for_each_tile(gi, [&](int t) {
+          const int64_t k = cursor[t]++;
+          s->tile_gaussian[k] = gi;
+          if constexpr (kSlots) s->entry_slot[k] = j++;
+        });
       }
-      const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
-      int32_t j = int32_t(s->entry_offset[gi]);
-      for_each_tile(gi, [&](int t) {
-        const int64_t k = cursor[t]++;
-        s->tile_gaussian[k] = gi;
-        s->entry_slot[k] = j++;
-      });
-    }
-  });
+    });
+  };
+  if (entry_slots) scatter(std::true_type{});
+  else scatter(std::false_type{});
 }
 
 
@@ -315,8 +320,9 @@ void rasterize_forward(const GaussianSet<T>& g, const RasterCamera<T>& camera, c
   s->n_contrib.resize(pixels);
   if constexpr (std::is_same_v<T, float>) preprocess_simd(g, camera, settings, s);
   else preprocess(g, camera, settings, s);
+  s->outputs = settings.outputs;
   static thread_local std::vector<uint64_t> keys;
-  bin_and_sort(s, &keys);
+  bin_and_sort(s, &keys, settings.outputs == RasterOutputs::kTraining);
   render_tiles(settings, s);
 }
 
@@ -325,6 +331,7 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
                         RasterState<T>* s, const std::vector<T>& v_image, GaussianSet<T>* grad,
                         std::vector<T>* v_mean2d_ndc) {
   const int64_t n = int64_t(g.size());
+  WGS_CHECK(s->outputs == RasterOutputs::kTraining);  // an image-only forward lacks what this reads
   WGS_CHECK_EQ(size_t(n), s->radius.size());
   WGS_CHECK_EQ(v_image.size(), s->image.size());
   const int num_tiles = s->tiles_x * s->tiles_y;

@@ -21,10 +21,19 @@
 
 namespace weathergs::recon {
 
+// What a forward pass leaves in the RasterState.
+enum class RasterOutputs {
+  kTraining,  // everything rasterize_backward reads
+  kImage,     // the image, for renders that are not trained on (test views, depth maps): the float
+              // pass skips the 2D values, entry slots, final transmittance and contributor counts
+              // that only the backward pass reads (same image bits; rasterize_backward refuses it)
+};
+
 template <typename T>
 struct RasterSettings {
   int sh_degree = kMaxShDegree;  // active SH degree, 0..3
   std::array<T, 3> background = {T(0), T(0), T(0)};
+  RasterOutputs outputs = RasterOutputs::kTraining;
 };
 
 // Everything the forward pass produces and the backward pass consumes. Reused between iterations
@@ -35,6 +44,7 @@ constexpr int kMaskTiles = 64;
 template <typename T>
 struct RasterState {
   int width = 0, height = 0, tiles_x = 0, tiles_y = 0;
+  RasterOutputs outputs = RasterOutputs::kTraining;  // what the last forward pass wrote
   // Per Gaussian.
   std::vector<T> mean2d;         // N x 2, pixels
   std::vector<T> cov2d;          // N x 3 (a, b, c) of [[a, b], [b, c]], px^2, low-pass included

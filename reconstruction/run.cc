@@ -140,6 +140,7 @@ std::vector<float> render_depth(const GaussianSet<float>& g, const Camera& camer
   }
   RasterSettings<float> rs;
   rs.sh_degree = 0;
+  rs.outputs = RasterOutputs::kImage;
   RasterState<float> state;
   rasterize_forward(z_model, rc, rs, &state);
   const std::vector<float> weighted = state.image;
@@ -284,6 +285,7 @@ RenderRunResult render_run(const RenderRunOptions& o) {
   const std::vector<std::string>& names = o.split == "all" ? all_views : dataset.split(o.split);
   RasterSettings<float> rs;
   rs.sh_degree = ri.sh_degree;
+  rs.outputs = RasterOutputs::kImage;
   for (int c = 0; c < 3; ++c) rs.background[c] = float(ri.options.background[c]);
   AtomicDirectory dir(o.out);
   RasterState<float> state;

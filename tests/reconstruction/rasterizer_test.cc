@@ -438,6 +438,50 @@ TEST(RasterizerTest, EveryKernelWidthGivesTheSameBits) {
   std::printf("tile kernel widths compared with 4: %d (native %d)\n", compared, native);
 }
 
+// An image-only forward (RasterOutputs::kImage: renders of test views) gives the training
+// forward's image bit for bit at every kernel width, and the backward pass refuses its state.
+TEST(RasterizerTest, ImageOnlyForwardGivesTheSameImage) {
+  const Camera c = front_camera(93, 70);  // partial tiles on both edges
+  GaussianSet<float> g = random_gaussians<float>(3000, 12, 1.0, 0.12, 0.2);
+  for (size_t i = 0; i < g.size(); i += 7) g.opacity_logit[i] = -5.f;  // alpha near the 1/255 cut-off
+  const RasterCamera<float> cam = RasterCamera<float>::from(c);
+  const int native = internal::tile_kernel_width();
+  int compared = 0;
+  for (int width : {4, 8}) {
+    if (!internal::set_tile_kernel_width(width)) continue;
+    for (int degree : {0, 3}) {
+      RasterSettings<float> rs;
+      rs.sh_degree = degree;
+      rs.background = {0.2f, 0.5f, 0.9f};
+      RasterState<float> training, image;
+      rasterize_forward(g, cam, rs, &training);
+      rs.outputs = RasterOutputs::kImage;
+      rasterize_forward(g, cam, rs, &image);
+      ASSERT_EQ(training.image.size(), image.image.size());
+      EXPECT_EQ(std::memcmp(training.image.data(), image.image.data(), image.image.size() * sizeof(float)), 0)
+          << width << " " << degree;
+      EXPECT_EQ(image.outputs, RasterOutputs::kImage);
+      EXPECT_EQ(training.outputs, RasterOutputs::kTraining);
+      ++compared;
+    }
+  }
+  EXPECT_TRUE(internal::set_tile_kernel_width(native));
+  EXPECT_GE(compared, 2);
+}
+
+TEST(RasterizerTest, BackwardRefusesAnImageOnlyForward) {
+  const Camera c = front_camera(40, 30);
+  const GaussianSet<float> g = random_gaussians<float>(50, 3, 1.0, 0.12, 0.2);
+  const RasterCamera<float> cam = RasterCamera<float>::from(c);
+  RasterSettings<float> rs;
+  rs.outputs = RasterOutputs::kImage;
+  RasterState<float> st;
+  rasterize_forward(g, cam, rs, &st);
+  const std::vector<float> v(st.image.size(), 0.f);
+  GaussianSet<float> grad;
+  EXPECT_THROW(rasterize_backward(g, cam, rs, &st, v, &grad), InternalError);  // exit 3 in the CLI
+}
+
 // SimdPreprocessEqualsScalar on one camera.
 void check_simd_preprocess(const Camera& c) {
   GaussianSet<float> g = random_gaussians<float>(2045, 21, 2.5, 0.1, 0.3);
