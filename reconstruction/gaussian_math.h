@@ -145,23 +145,38 @@ inline Vec4<T> quat_to_rotmat_vjp(const Vec4<T>& q_raw, const Mat3<T>& v_r) {
 
 // ---- 3D covariance Sigma = R diag(s^2) R^T with s = exp(log_scale) ----
 template <typename T>
-inline Mat3<T> covariance_3d(const Vec3<T>& log_scale, const Vec4<T>& q) {
-  const Vec3<T> s(model_exp(log_scale[0]), model_exp(log_scale[1]), model_exp(log_scale[2]));
+inline Vec3<T> scale_from_log(const Vec3<T>& log_scale) {
+  return Vec3<T>(model_exp(log_scale[0]), model_exp(log_scale[1]), model_exp(log_scale[2]));
+}
+
+// From the scales s = scale_from_log(log_scale) (the rasterizer keeps them from its forward pass).
+template <typename T>
+inline Mat3<T> covariance_3d_from_scale(const Vec3<T>& s, const Vec4<T>& q) {
   Mat3<T> m = quat_to_rotmat(q) * s.asDiagonal();
   return m * m.transpose();
 }
 
-// v_sigma: symmetric gradient. Adds into v_log_scale and v_q.
 template <typename T>
-inline void covariance_3d_vjp(const Vec3<T>& log_scale, const Vec4<T>& q, const Mat3<T>& v_sigma,
-                              Vec3<T>* v_log_scale, Vec4<T>* v_q) {
-  const Vec3<T> s(model_exp(log_scale[0]), model_exp(log_scale[1]), model_exp(log_scale[2]));
+inline Mat3<T> covariance_3d(const Vec3<T>& log_scale, const Vec4<T>& q) {
+  return covariance_3d_from_scale(scale_from_log(log_scale), q);
+}
+
+// v_sigma: symmetric gradient. Adds into v_log_scale and v_q. s = scale_from_log(log_scale).
+template <typename T>
+inline void covariance_3d_vjp_from_scale(const Vec3<T>& s, const Vec4<T>& q, const Mat3<T>& v_sigma,
+                                         Vec3<T>* v_log_scale, Vec4<T>* v_q) {
   Mat3<T> r = quat_to_rotmat(q);
   Mat3<T> m = r * s.asDiagonal();
   Mat3<T> v_m = (v_sigma + v_sigma.transpose()) * m;  // d(M M^T) with a symmetric gradient
   Mat3<T> v_r = v_m * s.asDiagonal();
   for (int j = 0; j < 3; ++j) (*v_log_scale)[j] += v_m.col(j).dot(r.col(j)) * s[j];
   *v_q += quat_to_rotmat_vjp(q, v_r);
+}
+
+template <typename T>
+inline void covariance_3d_vjp(const Vec3<T>& log_scale, const Vec4<T>& q, const Mat3<T>& v_sigma,
+                              Vec3<T>* v_log_scale, Vec4<T>* v_q) {
+  covariance_3d_vjp_from_scale(scale_from_log(log_scale), q, v_sigma, v_log_scale, v_q);
 }
 
 // ---- Camera as the rasterizer sees it ----

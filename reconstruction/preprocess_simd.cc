@@ -171,7 +171,7 @@ WGS_ALWAYS_INLINE uint64_t tile_mask_v(const float* sp, float inv_ca, float inv_
 }
 
 // kTraining: also the per-Gaussian values only the backward pass reads (mean2d, cov2d, conic,
-// opacity, color, clamped).
+// opacity, color, scale, clamped).
 template <int W, bool kTraining>
 WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const RasterCamera<float>& cam, int degree,
                                         RasterState<float>* s, int64_t i0, int count) {
@@ -335,6 +335,7 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
       s->conic[i * 3] = con_a[l]; s->conic[i * 3 + 1] = con_b[l]; s->conic[i * 3 + 2] = con_c[l];
       s->opacity[i] = opacity[l];
       for (int ch = 0; ch < 3; ++ch) s->color[i * 3 + ch] = rgb[ch][l];
+      s->scale[i * 3] = sx[l]; s->scale[i * 3 + 1] = sy[l]; s->scale[i * 3 + 2] = sz[l];
       s->clamped[i] = uint8_t(clamped_bits[l]);
     }
     s->depth[i] = z[l];

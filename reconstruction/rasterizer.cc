@@ -27,7 +27,9 @@ void preprocess(const GaussianSet<T>& g, const RasterCamera<T>& cam, const Raste
       if (!(z > T(kNearPlane))) continue;  // also culls NaN
       const Vec3<T> ls(g.log_scale[i * 3], g.log_scale[i * 3 + 1], g.log_scale[i * 3 + 2]);
       const Vec4<T> q(g.rotation[i * 4], g.rotation[i * 4 + 1], g.rotation[i * 4 + 2], g.rotation[i * 4 + 3]);
-      const Mat3<T> sigma = covariance_3d(ls, q);
+      const Vec3<T> scale = scale_from_log(ls);
+      for (int k = 0; k < 3; ++k) s->scale[i * 3 + k] = scale[k];
+      const Mat3<T> sigma = covariance_3d_from_scale(scale, q);
       const Projection<T> pr = project_gaussian(p, sigma, cam);
       T len;
       const Vec3<T> dir = view_direction(p, cam.center_world, &len);
@@ -308,6 +310,7 @@ void rasterize_forward(const GaussianSet<T>& g, const RasterCamera<T>& camera, c
   s->conic.resize(n * 3);
   s->opacity.resize(n);
   s->color.resize(n * 3);
+  s->scale.resize(n * 3);
   s->depth.resize(n);
   s->radius.resize(n);
   s->rect.resize(n * 4);
@@ -463,18 +466,19 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& cam, con
       const T o = s->opacity[i];
       grad->opacity_logit[i] = eg[5] * o * (T(1) - o);
       const Vec3<T> p(g.position[i * 3], g.position[i * 3 + 1], g.position[i * 3 + 2]);
-      const Vec3<T> ls(g.log_scale[i * 3], g.log_scale[i * 3 + 1], g.log_scale[i * 3 + 2]);
+      // The forward pass's scales: the same values as scale_from_log(log_scale), without its exps.
+      const Vec3<T> scale(s->scale[i * 3], s->scale[i * 3 + 1], s->scale[i * 3 + 2]);
       const Vec4<T> q(g.rotation[i * 4], g.rotation[i * 4 + 1], g.rotation[i * 4 + 2], g.rotation[i * 4 + 3]);
       Mat2<T> cov;
       cov << s->cov2d[i * 3], s->cov2d[i * 3 + 1], s->cov2d[i * 3 + 1], s->cov2d[i * 3 + 2];
       const Mat2<T> v_cov = inverse_2x2_vjp(cov, Vec3<T>(eg[2], eg[3], eg[4]));
-      const Mat3<T> sigma = covariance_3d(ls, q);
+      const Mat3<T> sigma = covariance_3d_from_scale(scale, q);
       Vec3<T> v_p = Vec3<T>::Zero();
       Mat3<T> v_sigma = Mat3<T>::Zero();
       project_gaussian_vjp(p, sigma, cam, Vec2<T>(eg[0], eg[1]), v_cov, &v_p, &v_sigma);
       Vec3<T> v_ls = Vec3<T>::Zero();
       Vec4<T> v_q = Vec4<T>::Zero();
-      covariance_3d_vjp(ls, q, v_sigma, &v_ls, &v_q);
+      covariance_3d_vjp_from_scale(scale, q, v_sigma, &v_ls, &v_q);
       const bool clamped[3] = {(s->clamped[i] & 1) != 0, (s->clamped[i] & 2) != 0, (s->clamped[i] & 4) != 0};
       sh_to_color_vjp(settings.sh_degree, &g.sh[i * kShFloats], p, cam.center_world, Vec3<T>(eg[6], eg[7], eg[8]),
                       clamped, &grad->sh[i * kShFloats], &v_p);

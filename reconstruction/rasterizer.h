@@ -51,6 +51,7 @@ struct RasterState {
   std::vector<T> conic;          // N x 3, inverse of cov2d
   std::vector<T> opacity;        // N, sigmoid(logit)
   std::vector<T> color;          // N x 3
+  std::vector<T> scale;          // N x 3, exp(log_scale) as the forward pass computed it
   std::vector<T> depth;          // N, camera z
   std::vector<int32_t> radius;   // N, reference radius in px; 0 = not rendered
   std::vector<int32_t> rect;     // N x 4: tile x0, y0, x1, y1 (exclusive): the tiles of the

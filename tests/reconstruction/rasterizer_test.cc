@@ -520,6 +520,11 @@ void check_simd_preprocess(const Camera& c) {
       scalar = simd;
       // Poison the per-Gaussian outputs, so that the comparison sees what the scalar pass writes.
       std::fill(scalar.splat.begin(), scalar.splat.end(), -7.f);
+      std::fill(scalar.scale.begin(), scalar.scale.end(), -7.f);
+      std::fill(scalar.mean2d.begin(), scalar.mean2d.end(), -7.f);
+      std::fill(scalar.cov2d.begin(), scalar.cov2d.end(), -7.f);
+      std::fill(scalar.depth.begin(), scalar.depth.end(), -7.f);
+      std::fill(scalar.clamped.begin(), scalar.clamped.end(), uint8_t(7));
       std::fill(scalar.rect.begin(), scalar.rect.end(), -7);
       std::fill(scalar.radius.begin(), scalar.radius.end(), -7);
       std::fill(scalar.tile_mask.begin(), scalar.tile_mask.end(), 7u);
@@ -535,6 +540,7 @@ void check_simd_preprocess(const Camera& c) {
         ASSERT_TRUE(same(at(simd.splat, kSplatFloats), at(scalar.splat, kSplatFloats))) << i << " " << width;
         ASSERT_TRUE(same(at(simd.cov2d, 3), at(scalar.cov2d, 3))) << i << " " << width;
         ASSERT_TRUE(same(at(simd.mean2d, 2), at(scalar.mean2d, 2))) << i << " " << width;
+        ASSERT_TRUE(same(at(simd.scale, 3), at(scalar.scale, 3))) << i << " " << width;
         ASSERT_TRUE(same(at(simd.depth, 1), at(scalar.depth, 1))) << i << " " << width;
         ASSERT_EQ(simd.clamped[i], scalar.clamped[i]) << i << " " << width;
       }
