@@ -169,6 +169,19 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slo
     for (int ty = r[1]; ty < r[3]; ++ty)
       for (int tx = r[0]; tx < r[2]; ++tx) fn(ty * s->tiles_x + tx);
   };
+  // Both passes below visit the Gaussians in depth order, i.e. at random: they fetch what
+  // for_each_tile (and the scatter's slots) read 16 ranks ahead.
+  auto gaussian_at = [&](int64_t rank) __attribute__((always_inline)) {
+    return int32_t((*keys)[rank] & 0xffffffffu);
+  };
+  auto prefetch_ahead = [&](int64_t rank, int64_t hi, auto offsets) __attribute__((always_inline)) {
+    constexpr int64_t kPrefetch = 16;
+    if (rank + kPrefetch >= hi) return;
+    const int64_t ahead = gaussian_at(rank + kPrefetch);
+    __builtin_prefetch(&s->rect[ahead * 4]);
+    __builtin_prefetch(&s->tile_mask[ahead]);
+    if constexpr (decltype(offsets)::value) __builtin_prefetch(&s->entry_offset[ahead]);
+  };
   const int64_t chunks = num_chunks(0, visible, kGaussianChunk);
   // The caller's buffer, by reference: a thread_local named inside the lambdas would be each worker's own.
   static thread_local std::vector<int64_t> start_buffer;
@@ -176,14 +189,9 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slo
   start.assign(size_t(chunks) * num_tiles, 0);
   parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
     int64_t* count = &start[size_t(c) * num_tiles];
-    constexpr int64_t kPrefetch = 16;  // the Gaussians are visited in depth order: fetch ahead
     for (int64_t rank = lo; rank < hi; ++rank) {
-      if (rank + kPrefetch < hi) {
-        const int64_t ahead = int64_t((*keys)[rank + kPrefetch] & 0xffffffffu);
-        __builtin_prefetch(&s->rect[ahead * 4]);
-        __builtin_prefetch(&s->tile_mask[ahead]);
-      }
-      for_each_tile(int32_t((*keys)[rank] & 0xffffffffu), [&](int t) { ++count[t]; });
+      prefetch_ahead(rank, hi, std::false_type{});
+      for_each_tile(gaussian_at(rank), [&](int t) { ++count[t]; });
     }
   });
   s->tile_offset.assign(num_tiles + 1, 0);
@@ -206,15 +214,9 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slo
     constexpr bool kSlots = decltype(with_slots)::value;
     parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
       int64_t* cursor = &start[size_t(c) * num_tiles];
-      constexpr int64_t kPrefetch = 16;  // the Gaussians are visited in depth order: fetch ahead
       for (int64_t rank = lo; rank < hi; ++rank) {
-        if (rank + kPrefetch < hi) {
-          const int64_t ahead = int64_t((*keys)[rank + kPrefetch] & 0xffffffffu);
-          __builtin_prefetch(&s->rect[ahead * 4]);
-          __builtin_prefetch(&s->tile_mask[ahead]);
-          if constexpr (kSlots) __builtin_prefetch(&s->entry_offset[ahead]);
-        }
-        const int32_t gi = int32_t((*keys)[rank] & 0xffffffffu);
+        prefetch_ahead(rank, hi, with_slots);
+        const int32_t gi = gaussian_at(rank);
         [[maybe_unused]] int32_t j = kSlots ? int32_t(s->entry_offset[gi]) : 0;
         for_each_tile(gi, [&](int t) {
           const int64_t k = cursor[t]++;
