@@ -438,12 +438,22 @@ TEST(RasterizerTest, EveryKernelWidthGivesTheSameBits) {
   std::printf("tile kernel widths compared with 4: %d (native %d)\n", compared, native);
 }
 
-// An image-only forward (RasterOutputs::kImage: renders of test views) gives the training
-// forward's image bit for bit at every kernel width, and the backward pass refuses its state.
-TEST(RasterizerTest, ImageOnlyForwardGivesTheSameImage) {
+// An image-only forward (RasterOutputs::kImage: renders of test views) matches the training forward's
+// image up to rounding: its block power is in Horner form and at 8 lanes with FMA it is fused
+// (raster_image_simd.cc). Tolerances: rounding alone moves a pixel by a few float ulps (measured max
+// 4e-7 over six random scenes, 2026-11-28), so the mean stays under kMeanTolerance; where rounding
+// decides a cut-off differently the pixel moves by that entry's weight alpha T, at most
+// 1/255 at the 1/255 cut-off and 1e-4 alpha / (1 - alpha) <= 0.0099 at the transmittance stop
+// (alpha <= 0.99), so kMaxTolerance is that bound, and such pixels are rare (3 of 180,000 values in
+// the densest measured scene): at most kFlipFraction of the values differ by more than 1e-5. The
+// image-only render is deterministic: the same bits with 1 and 2 threads. The backward refuses its
+// state (next test).
+TEST(RasterizerTest, ImageOnlyForwardMatchesTheTrainingForward) {
+  constexpr double kMeanTolerance = 1e-6, kMaxTolerance = 0.0099, kFlipFraction = 1e-3;
   const Camera c = front_camera(93, 70);  // partial tiles on both edges
   GaussianSet<float> g = random_gaussians<float>(3000, 12, 1.0, 0.12, 0.2);
   for (size_t i = 0; i < g.size(); i += 7) g.opacity_logit[i] = -5.f;  // alpha near the 1/255 cut-off
+  for (size_t i = 3; i < g.size(); i += 11) g.opacity_logit[i] = 6.f;  // alpha clamped at 0.99
   const RasterCamera<float> cam = RasterCamera<float>::from(c);
   const int native = internal::tile_kernel_width();
   int compared = 0;
@@ -453,12 +463,32 @@ TEST(RasterizerTest, ImageOnlyForwardGivesTheSameImage) {
       RasterSettings<float> rs;
       rs.sh_degree = degree;
       rs.background = {0.2f, 0.5f, 0.9f};
-      RasterState<float> training, image;
+      RasterState<float> training, image, image_1thread;
+      set_num_threads(2);
       rasterize_forward(g, cam, rs, &training);
       rs.outputs = RasterOutputs::kImage;
       rasterize_forward(g, cam, rs, &image);
+      set_num_threads(1);
+      rasterize_forward(g, cam, rs, &image_1thread);
+      set_num_threads(0);
       ASSERT_EQ(training.image.size(), image.image.size());
-      EXPECT_EQ(std::memcmp(training.image.data(), image.image.data(), image.image.size() * sizeof(float)), 0)
+      double sum = 0, worst = 0;
+      int64_t flipped = 0;
+      for (size_t i = 0; i < image.image.size(); ++i) {
+        const double d = std::abs(double(training.image[i]) - double(image.image[i]));
+        sum += d;
+        worst = std::max(worst, d);
+        flipped += d > 1e-5;
+      }
+      const double n = double(image.image.size());
+      EXPECT_LE(sum / n, kMeanTolerance) << width << " " << degree;
+      EXPECT_LE(worst, kMaxTolerance) << width << " " << degree;
+      EXPECT_LE(double(flipped) / n, kFlipFraction) << width << " " << degree;
+      std::printf("image-only vs training forward, %d lanes, degree %d: mean %.2g, max %.2g, %lld of %.0f over 1e-5\n",
+                  width, degree, sum / n, worst, static_cast<long long>(flipped), n);
+      // Not vacuous: if the two ever become bit-identical again, compare them with memcmp instead.
+      EXPECT_GT(sum, 0.0) << "the image-only arithmetic is expected to round differently";
+      EXPECT_EQ(std::memcmp(image_1thread.image.data(), image.image.data(), n * sizeof(float)), 0)
           << width << " " << degree;
       EXPECT_EQ(image.outputs, RasterOutputs::kImage);
       EXPECT_EQ(training.outputs, RasterOutputs::kTraining);
