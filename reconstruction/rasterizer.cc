@@ -156,31 +156,38 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slo
   // A rectangle of at most kMaskTiles tiles visits its mask's set bits (row-major, so the same
   // tiles in the same order as the loops below): one loop whose trip count is the entry count
   // instead of a loop per row and a test per tile (fewer mispredicted branches).
-  auto for_each_tile = [&](int32_t gi, auto&& fn) {
-    const int32_t* r = &s->rect[int64_t(gi) * 4];
+  // The arrays by plain pointer: the passes below write through other pointers, which the compiler
+  // cannot tell from the vectors' own members, so it would reload those on every iteration.
+  const int32_t* const rects = s->rect.data();
+  const uint64_t* const masks = s->tile_mask.data();
+  const uint64_t* const sorted = keys->data();
+  const int tiles_x = s->tiles_x;
+  auto for_each_tile = [rects, masks, tiles_x](int32_t gi, auto&& fn) __attribute__((always_inline)) {
+    const int32_t* r = &rects[int64_t(gi) * 4];
     const int w = r[2] - r[0], area = w * (r[3] - r[1]);
     if (area <= kMaskTiles) {
-      for (uint64_t m = s->tile_mask[gi]; m != 0; m &= m - 1) {
+      for (uint64_t m = masks[gi]; m != 0; m &= m - 1) {
         const int b = __builtin_ctzll(m);
-        fn((r[1] + b / w) * s->tiles_x + r[0] + b % w);
+        fn((r[1] + b / w) * tiles_x + r[0] + b % w);
       }
       return;
     }
     for (int ty = r[1]; ty < r[3]; ++ty)
-      for (int tx = r[0]; tx < r[2]; ++tx) fn(ty * s->tiles_x + tx);
+      for (int tx = r[0]; tx < r[2]; ++tx) fn(ty * tiles_x + tx);
   };
   // Both passes below visit the Gaussians in depth order, i.e. at random: they fetch what
   // for_each_tile (and the scatter's slots) read 16 ranks ahead.
-  auto gaussian_at = [&](int64_t rank) __attribute__((always_inline)) {
-    return int32_t((*keys)[rank] & 0xffffffffu);
+  auto gaussian_at = [sorted](int64_t rank) __attribute__((always_inline)) {
+    return int32_t(sorted[rank] & 0xffffffffu);
   };
+  const int64_t* const offsets_of = s->entry_offset.data();
   auto prefetch_ahead = [&](int64_t rank, int64_t hi, auto offsets) __attribute__((always_inline)) {
     constexpr int64_t kPrefetch = 16;
     if (rank + kPrefetch >= hi) return;
     const int64_t ahead = gaussian_at(rank + kPrefetch);
-    __builtin_prefetch(&s->rect[ahead * 4]);
-    __builtin_prefetch(&s->tile_mask[ahead]);
-    if constexpr (decltype(offsets)::value) __builtin_prefetch(&s->entry_offset[ahead]);
+    __builtin_prefetch(&rects[ahead * 4]);
+    __builtin_prefetch(&masks[ahead]);
+    if constexpr (decltype(offsets)::value) __builtin_prefetch(&offsets_of[ahead]);
   };
   const int64_t chunks = num_chunks(0, visible, kGaussianChunk);
   // The caller's buffer, by reference: a thread_local named inside the lambdas would be each worker's own.
@@ -191,7 +198,7 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slo
     int64_t* count = &start[size_t(c) * num_tiles];
     for (int64_t rank = lo; rank < hi; ++rank) {
       prefetch_ahead(rank, hi, std::false_type{});
-      for_each_tile(gaussian_at(rank), [&](int t) { ++count[t]; });
+      for_each_tile(gaussian_at(rank), [&](int t) __attribute__((always_inline)) { ++count[t]; });
     }
   });
   s->tile_offset.assign(num_tiles + 1, 0);
@@ -210,6 +217,8 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slo
   if (entry_slots) s->entry_slot.resize(entries);
   // The same pass gives each entry its slot in the per-Gaussian order (the Gaussian's tiles in
   // row-major order: entry_slot), which only the backward pass reads.
+  int32_t* const lists = s->tile_gaussian.data();
+  int32_t* const slots = entry_slots ? s->entry_slot.data() : nullptr;
   auto scatter = [&](auto with_slots) {
     constexpr bool kSlots = decltype(with_slots)::value;
     parallel_for_chunks(0, visible, kGaussianChunk, [&](int64_t c, int64_t lo, int64_t hi) {
@@ -217,11 +226,11 @@ void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slo
       for (int64_t rank = lo; rank < hi; ++rank) {
         prefetch_ahead(rank, hi, with_slots);
         const int32_t gi = gaussian_at(rank);
-        [[maybe_unused]] int32_t j = kSlots ? int32_t(s->entry_offset[gi]) : 0;
-        for_each_tile(gi, [&](int t) {
+        [[maybe_unused]] int32_t j = kSlots ? int32_t(offsets_of[gi]) : 0;
+        for_each_tile(gi, [&](int t) __attribute__((always_inline)) {
           const int64_t k = cursor[t]++;
-          s->tile_gaussian[k] = gi;
-          if constexpr (kSlots) s->entry_slot[k] = j++;
+          lists[k] = gi;
+          if constexpr (kSlots) slots[k] = j++;
         });
       }
     });
