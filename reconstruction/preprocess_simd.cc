@@ -140,17 +140,23 @@ WGS_ALWAYS_INLINE uint64_t tile_mask_v(const float* sp, float inv_ca, float inv_
   using vi = typename Lanes<W>::i;
   const int w = r[2] - r[0];
   const float ca = sp[2], cb = sp[3], cc = sp[4], q_max = sp[11];
+  // Tile b of the rectangle is (b % w, b / w), the row taken as (b * ceil(4096 / w)) >> 12, exact for
+  // b < 64 and w <= 64: vector integer operations instead of an integer division per lane (this
+  // function took ~a fifth of the preprocess with them).
+  const int32_t inv_w = (4096 + w - 1) / w;
+  vi lane, lane_bit;
+  for (int l = 0; l < W; ++l) lane[l] = l, lane_bit[l] = int32_t(1) << l;
   uint64_t mask = 0;
   for (int b0 = 0; b0 < area; b0 += W) {
-    vf x_lo, x_hi, y_lo, y_hi;
-    for (int l = 0; l < W; ++l) {
-      const int b = std::min(b0 + l, area - 1);
-      const int tx = r[0] + b % w, ty = r[1] + b / w;
-      x_lo[l] = float(tx * kTileSize);
-      x_hi[l] = float(std::min(width, (tx + 1) * kTileSize));
-      y_lo[l] = float(ty * kTileSize);
-      y_hi[l] = float(std::min(height, (ty + 1) * kTileSize));
-    }
+    const vi b_raw = lane + b0;
+    const vi b = b_raw < area - 1 ? b_raw : vi{} + (area - 1);  // the tail repeats the last tile
+    const vi row = (b * inv_w) >> 12;
+    const vi tx = (b - row * w) + r[0], ty = row + r[1];
+    const vi tx_end = (tx + 1) * kTileSize, ty_end = (ty + 1) * kTileSize;
+    vf x_lo = __builtin_convertvector(tx * kTileSize, vf);
+    vf x_hi = __builtin_convertvector(tx_end < width ? tx_end : vi{} + width, vf);
+    vf y_lo = __builtin_convertvector(ty * kTileSize, vf);
+    vf y_hi = __builtin_convertvector(ty_end < height ? ty_end : vi{} + height, vf);
     x_lo = x_lo + 0.5f - sp[0]; x_hi = x_hi - 0.5f - sp[0];
     y_lo = y_lo + 0.5f - sp[1]; y_hi = y_hi - 0.5f - sp[1];
     const vi inside = (x_lo <= 0.0f) & (x_hi >= 0.0f) & (y_lo <= 0.0f) & (y_hi >= 0.0f);
@@ -163,9 +169,11 @@ WGS_ALWAYS_INLINE uint64_t tile_mask_v(const float* sp, float inv_ca, float inv_
     q_min = vmin(q_min, q(x_hi, clamp(-cb * x_hi * inv_cc, y_lo, y_hi)));
     q_min = vmin(q_min, q(clamp(-cb * y_lo * inv_ca, x_lo, x_hi), y_lo));
     q_min = vmin(q_min, q(clamp(-cb * y_hi * inv_ca, x_lo, x_hi), y_hi));
-    const vi hit = inside | (q_min <= q_max);
-    for (int l = 0; l < W && b0 + l < area; ++l)
-      if (hit[l]) mask |= uint64_t(1) << (b0 + l);
+    const vi hit = (inside | (q_min <= q_max)) & (b_raw < area);
+    const vi bits = hit & lane_bit;
+    uint32_t block_bits = 0;  // distinct bits: the sum is their union
+    for (int l = 0; l < W; ++l) block_bits += uint32_t(bits[l]);
+    mask |= uint64_t(block_bits) << b0;
   }
   return mask;
 }
