@@ -441,7 +441,7 @@ TEST(RasterizerTest, EveryKernelWidthGivesTheSameBits) {
 // An image-only forward (RasterOutputs::kImage: renders of test views) matches the training forward's
 // image up to rounding: its block power is in Horner form and at 8 lanes with FMA it is fused
 // (raster_image_simd.cc). Tolerances: rounding alone moves a pixel by a few float ulps (measured max
-// 4e-7 over six random scenes, 2026-11-28), so the mean stays under kMeanTolerance; where rounding
+// 4e-7 over six random scenes, 2026-11-27), so the mean stays under kMeanTolerance; where rounding
 // decides a cut-off differently the pixel moves by that entry's weight alpha T, at most
 // 1/255 at the 1/255 cut-off and 1e-4 alpha / (1 - alpha) <= 0.0099 at the transmittance stop
 // (alpha <= 0.99), so kMaxTolerance is that bound, and such pixels are rare (3 of 180,000 values in
