@@ -94,7 +94,8 @@ void BM_Forward(benchmark::State& state) {
   state.counters["entries"] = double(p.st.num_entries());
 }
 
-// A render (`weathergs render`, test views): the image only (RasterOutputs::kImage), same bits.
+// A render (`weathergs render`, test views): the image only (RasterOutputs::kImage), through the
+// fused image-only blend where the CPU has FMA (equal to the training forward up to rounding).
 void BM_Render(benchmark::State& state) {
   Phases p(int(state.range(0)), int(state.range(1)), int(state.range(2)));
   p.rs.outputs = RasterOutputs::kImage;
