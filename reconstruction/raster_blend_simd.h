@@ -180,18 +180,7 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
       for (int py = py0; py <= py1; ++py) refresh_row(py - y0);
     }
   }
-  for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) {
-      const int p = (y - y0) * kTileSize + (x - x0);
-      const int64_t pix = int64_t(y) * s->width + x;
-      s->image[pix * 3] = cr[p] + trans[p] * settings.background[0];
-      s->image[pix * 3 + 1] = cg[p] + trans[p] * settings.background[1];
-      s->image[pix * 3 + 2] = cb_[p] + trans[p] * settings.background[2];
-      if constexpr (kTraining) {
-        s->final_transmittance[pix] = trans[p];
-        s->n_contrib[pix] = last[p];
-      }
-    }
+  write_tile<kTraining>(settings, s, x0, y0, x1, y1, cr, cg, cb_, trans, last);
 }
 
 }  // namespace

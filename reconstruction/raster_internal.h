@@ -97,6 +97,27 @@ inline void pixel_box(T mean, T half, int t0, int t1, int size, T* lo, T* hi) {
   *hi = std::clamp(std::floor(mean + half - T(0.5)), first - T(1), last);
 }
 
+// Writes a blended tile [x0, x1) x [y0, y1) from its planar per-pixel state (index (y - y0) *
+// kTileSize + (x - x0)): colour plus the background through the remaining transmittance and, for
+// kTraining, the final transmittance and contributor count the backward pass reads. Shared by the
+// scalar template (rasterizer.cc) and the SIMD blend (raster_blend_simd.h): the same operations.
+template <bool kTraining, typename T>
+inline void write_tile(const RasterSettings<T>& settings, RasterState<T>* s, int x0, int y0, int x1, int y1,
+                       const T* cr, const T* cg, const T* cb, const T* trans, const int32_t* last) {
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const int p = (y - y0) * kTileSize + (x - x0);
+      const int64_t pix = int64_t(y) * s->width + x;
+      s->image[pix * 3] = cr[p] + trans[p] * settings.background[0];
+      s->image[pix * 3 + 1] = cg[p] + trans[p] * settings.background[1];
+      s->image[pix * 3 + 2] = cb[p] + trans[p] * settings.background[2];
+      if constexpr (kTraining) {
+        s->final_transmittance[pix] = trans[p];
+        s->n_contrib[pix] = last[p];
+      }
+    }
+}
+
 // The record's pixel box (sp[12..15]) within the tile [x0, x1) x [y0, y1).
 template <typename T>
 inline void box_in_tile(const T* sp, int x0, int x1, int y0, int y1, int* px0, int* px1, int* py0, int* py1) {

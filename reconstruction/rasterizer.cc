@@ -297,16 +297,7 @@ void render_tiles(const RasterSettings<T>& settings, RasterState<T>* s) {
       }
       num_done += stopped;
     }
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) {
-        const int p = (y - y0) * kTileSize + (x - x0);
-        const int64_t pix = int64_t(y) * s->width + x;
-        s->image[pix * 3] = cr[p] + trans[p] * settings.background[0];
-        s->image[pix * 3 + 1] = cg[p] + trans[p] * settings.background[1];
-        s->image[pix * 3 + 2] = cb_[p] + trans[p] * settings.background[2];
-        s->final_transmittance[pix] = trans[p];
-        s->n_contrib[pix] = last[p];
-      }
+    write_tile<true>(settings, s, x0, y0, x1, y1, cr, cg, cb_, trans, last);
   });
 }
 
