@@ -123,7 +123,9 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
     const vf o = splat<vf>(sp[5]), r = splat<vf>(sp[6]), g = splat<vf>(sp[7]), b = splat<vf>(sp[8]);
     // Below this power every lane's alpha is < 1/255 (sp[11] carries the margin against the float
     // rounding of the power and blend_exp, see tile_touched): a block with no lane at or above it and
-    // not done changes nothing, so it is skipped before the exp, the loads and the stores.
+    // not done changes nothing, so it is skipped before the exp, the loads and the stores. The margin
+    // (>= 5e-4 in power) also covers the fused image-only kernel, whose power and exp round
+    // differently by ~1e-6 relative.
     const vf power_min = splat<vf>(-0.5f * sp[11]);
     const vi contributor = vi{} + int32_t(k - begin + 1);
     const int bx0 = ((px0 - x0) / W) * W, bx1 = px1 - x0;
