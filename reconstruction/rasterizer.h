@@ -26,7 +26,9 @@ enum class RasterOutputs {
   kTraining,  // everything rasterize_backward reads
   kImage,     // the image, for renders that are not trained on (test views, depth maps): the float
               // pass skips the 2D values, entry slots, final transmittance and contributor counts
-              // that only the backward pass reads (same image bits; rasterize_backward refuses it)
+              // that only the backward pass reads, and blends with fused multiply-add where the CPU
+              // has it (the training forward's image up to rounding, docs/reconstruction.md);
+              // rasterize_backward refuses it
 };
 
 template <typename T>
