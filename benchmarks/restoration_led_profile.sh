@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# The shipped LED on the benchmark scenes at one render profile (issue 11; docs/restoration.md, "The LED
-# at the paper profile"). Generates the rain variants of both styles and the paper-style snow variants
-# of tanabata, factory and pool at PROFILE (no COLMAP, with the restoration targets; the clean renders come from the generate cache,
-# so a second run only re-weathers), runs `weathergs detect` on each (the default post-processing:
-# the training views' averaged map, the weights' peak rule, three 3x3 dilations) and prints one row per
-# variant: IoU / precision / recall against masks/lens pooled over the training views, or, for the
-# drop-free snow variants, the share of pixels masked.
+# The LED (the shipped weights, or LED_WEIGHTS=STEM) on the benchmark scenes at one render profile
+# (issue 11; docs/restoration.md, "The LED at the paper profile"). Generates the rain variants of both
+# styles and the paper-style snow variants of tanabata, factory and pool at PROFILE (no COLMAP, with
+# the restoration targets; the clean renders come from the generate cache, so a second run only
+# re-weathers), runs `weathergs detect` on each (the default post-processing: the training views'
+# averaged map, the weights' peak rule, three 3x3 dilations) and prints one row per variant: IoU /
+# precision / recall against masks/lens pooled over the training views, or, for the drop-free snow
+# variants, the share of pixels masked. Existing datasets in OUT are reused.
 # Usage: restoration_led_profile.sh WEATHERGS OUT [PROFILE=paper] > table.md
 # OUT is laid out like the repository root for the other LED scripts: datasets in
 # OUT/data/suite_<style>/<scene>_<weather>, masks and averaged maps (--save-attention) of the rain
@@ -34,7 +35,7 @@ for style in paper physical; do
           --profile "$PROFILE" --no-colmap --targets --out "$d" > /dev/null
       fi
       secs=$(( $(date +%s) - start ))
-      "$WGS" --quiet detect --data "$d" --out "$m" --save-attention > /dev/null
+      "$WGS" --quiet detect --data "$d" --out "$m" --save-attention ${LED_WEIGHTS:+--weights "$LED_WEIGHTS"} > /dev/null
       /usr/bin/python3 - "$m/detect.json" "${scene}_$weather" "$style" "$secs" <<'EOF'
 import json, sys
 r = json.load(open(sys.argv[1]))
