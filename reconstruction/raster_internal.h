@@ -104,8 +104,9 @@ inline void pixel_box(T mean, T half, int t0, int t1, int size, T* lo, T* hi) {
 // Always inlined: the fused image-only translation unit (raster_image_simd.cc) contracts floating-point
 // expressions, so an out-of-line copy from there must never be the one the linker gives the others.
 template <bool kTraining, typename T>
-inline __attribute__((always_inline)) void write_tile(const RasterSettings<T>& settings, RasterState<T>* s, int x0, int y0, int x1, int y1,
-                       const T* cr, const T* cg, const T* cb, const T* trans, const int32_t* last) {
+inline __attribute__((always_inline)) void write_tile(const RasterSettings<T>& settings, RasterState<T>* s,
+                                                      int x0, int y0, int x1, int y1, const T* cr, const T* cg,
+                                                      const T* cb, const T* trans, const int32_t* last) {
   for (int y = y0; y < y1; ++y)
     for (int x = x0; x < x1; ++x) {
       const int p = (y - y0) * kTileSize + (x - x0);
