@@ -1,4 +1,4 @@
-// `weathergs calibrate-led`: calibrates trained LED weights again on held-out datasets (docs/restoration.md).
+// `weathergs calibrate-led`: calibrates trained LED weights again on held-out datasets (docs/restoration_led.md).
 #include <cstdio>
 #include <memory>
 
@@ -37,7 +37,8 @@ Command make(CLI::App& root) {
   CLI::App* sub = root.add_subcommand(
       "calibrate-led",
       "Calibrate trained Lens Effect Detector weights again on held-out datasets: the threshold for their dilation "
-      "count and, with --peak, the peak-relative rule; writes the same network with the new calibration (docs/restoration.md).");
+      "count and, with --peak, the peak-relative rule; writes the same network with the new calibration "
+      "(docs/restoration_led.md).");
   sub->add_option("--weights", a->weights,
                   "Weights stem to calibrate; default $WEATHERGS_LED_WEIGHTS, else the installed models/led/led");
   sub->add_option("--held-out", a->held_out, "Held-out datasets with masks/lens (never trained on)")->required();

@@ -1,4 +1,4 @@
-// `weathergs detect`: the learned Lens Effect Detector over a dataset (docs/restoration.md).
+// `weathergs detect`: the learned Lens Effect Detector over a dataset (docs/restoration_led.md).
 #include <cstdio>
 #include <fmt/format.h>
 #include <memory>
@@ -57,7 +57,7 @@ Command make(CLI::App& root) {
   CLI::App* sub = root.add_subcommand(
       "detect",
       "Find the drops on the lens in every view of a dataset with the learned Lens Effect Detector and write "
-      "loss masks for 3DGS (255 = excluded; docs/restoration.md).");
+      "loss masks for 3DGS (255 = excluded; docs/restoration_led.md).");
   sub->add_option("--data", a->data, "Dataset folder")->required();
   sub->add_option("--out", a->out, "Output folder: <view>.png masks and detect.json")->required();
   sub->add_option("--images", a->images, "Detect on these <view>.png instead of the dataset's images/ (e.g. `filter` output)");

@@ -1,4 +1,4 @@
-// `weathergs train-led`: trains and calibrates the Lens Effect Detector (docs/restoration.md, make models).
+// `weathergs train-led`: trains and calibrates the Lens Effect Detector (docs/restoration_led.md, make models).
 #include <cstdio>
 #include <memory>
 
@@ -43,7 +43,7 @@ Command make(CLI::App& root) {
   CLI::App* sub = root.add_subcommand(
       "train-led",
       "Train the Lens Effect Detector on generated datasets (images/ + masks/lens/) and calibrate its threshold on "
-      "held-out ones (docs/restoration.md; `make models` runs the documented recipe).");
+      "held-out ones (docs/restoration_led.md; `make models` runs the documented recipe).");
   sub->add_option("--data", a->data, "Training datasets")->required();
   sub->add_option("--held-out", a->held_out, "Held-out datasets for the threshold calibration (never trained on)");
   sub->add_option("--out", a->out, "Weights stem: writes <stem>.json and <stem>.bin")->required();
@@ -61,11 +61,11 @@ Command make(CLI::App& root) {
                             ->check(CLI::Range(0, restoration::kMaxDilations));
   sub->add_flag("--calibrate-dilation", a->options.calibrate_dilations,
                 "Choose the dilations (0..3) with the threshold for the held-out mask IoU (higher IoU, worse reconstructions: "
-                "docs/restoration.md)")
+                "docs/restoration_led.md)")
       ->excludes(dilate);
   sub->add_flag("--calibrate-peak", a->options.calibrate_peak,
                 "Also calibrate the peak-relative rule (per drop, attention >= fraction x its peak) and store it with the "
-                "weights: `detect` then uses it by default (docs/restoration.md)");
+                "weights: `detect` then uses it by default (docs/restoration_led.md)");
   sub->add_option("--colour-jitter", t.colour_jitter, "Photometric augmentation: channel and overall gains in [1-j, 1+j] (0 = off)")
       ->capture_default_str();
   sub->add_option("--balance-drops", t.drop_balance_area,

@@ -123,7 +123,7 @@ Command make(CLI::App& root) {
                   "Learned AEF weights folder (derain, desnow, selector; weathergs, weathergs-no-led, weathergs-nerf); "
                   "default $WEATHERGS_AEF_WEIGHTS, else the installed models/aef");
   sub->add_option("--led-threshold", a->led_threshold,
-                  "LED mask where the attention >= t (default: the weights' calibrated rule, docs/restoration.md)")
+                  "LED mask where the attention >= t (default: the weights' calibrated rule, docs/restoration_led.md)")
       ->check(CLI::Range(0.0, 1.0));
   a->scoring.add_to(sub);
   return {sub, [a] { return run(*a); }};

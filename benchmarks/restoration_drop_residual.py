@@ -9,7 +9,7 @@ Usage: restoration_drop_residual.py SUITE_DIR RENDERS_DIR [VARIANT ...]
                on the weathered images, e.g.
                weathergs render --model RUNS/<variant>/3dgs/seed0/model --split train --out RENDERS_DIR/<variant>
 Thresholds tried: Otsu, the 80th and 85th percentile, mean + 1 and 1.5 standard deviations; each with no
-dilation and with the LED's 3x3 dilation x3. Results: docs/restoration.md ("Classical drop baseline").
+dilation and with the LED's 3x3 dilation x3. Results: docs/restoration_led_record.md ("Classical drop baseline").
 """
 import glob
 import os

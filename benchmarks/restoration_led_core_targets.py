@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The LED trained on the drops' cores instead of the whole drops (issue 11; docs/restoration.md,
+"""The LED trained on the drops' cores instead of the whole drops (issue 11; docs/restoration_led_record.md,
 "Trained on the drops' cores").
 
 After the three 3x3 dilations the best mask a detector can write is each drop's core (the drop eroded

@@ -14,7 +14,7 @@ Usage:
                               --set NAME=STEM[+STEM...] [--set ...]
 The first --set should be the shipped weights alone: for it the script also checks that its own
 rules reproduce the IoU that `detect` reported (they must, or the comparison means nothing).
-Results: docs/restoration.md ("An ensemble of LED networks").
+Results: docs/restoration_led_record.md ("An ensemble of LED networks").
 """
 import argparse
 import hashlib

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Which lens drops does the LED miss, and how much do they change the view? (issue 11;
-docs/restoration.md, "Not done yet"). For each rain variant of the two quick suites: the drops of the
+docs/restoration_led.md, "Not done yet"). For each rain variant of the two quick suites: the drops of the
 per-pixel majority truth (8-connected components of at least MIN_AREA px), each with its area, the
 mean over its pixels of how much the lens alone changes the view (|targets/lens_only - clean|, the
 largest of the three channels, 8-bit levels, averaged over the training views), the same for the

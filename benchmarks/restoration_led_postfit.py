@@ -7,7 +7,7 @@ never sees at that resolution: the mean |Laplacian| of the luminance (a lens-fix
 place in every view), the per-pixel standard deviation over the views, and the gradient of the mean
 view against the mean of the views' gradients (edges that stay put). Each cue enters alone and times
 a, so it can move the map's boundary. Target: the per-pixel majority of the training views' truth,
-eroded three times (the core that the three 3x3 dilations grow back; docs/restoration.md, "What the
+eroded three times (the core that the three 3x3 dilations grow back; docs/restoration_led.md, "What the
 post-processing allows"). The probability threshold is chosen for the mean IoU after the three
 dilations, like `calibrate-led`.
 
@@ -19,7 +19,7 @@ training views, as detect.json's `ground_truth`).
 Usage:
   restoration_led_postfit.py --weathergs BIN --work DIR --weights STEM --held-out DATASET...
                              --benchmark DATASET...
-Results: docs/restoration.md ("A learned post-processing of the averaged map").
+Results: docs/restoration_led_record.md ("A learned post-processing of the averaged map").
 """
 import argparse
 import json

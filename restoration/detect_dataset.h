@@ -1,5 +1,5 @@
 // `weathergs detect`: the learned Lens Effect Detector over the views of a dataset, turned into loss
-// masks for 3DGS (docs/restoration.md). libtorch-free: the network is behind restoration/lens_detector.h.
+// masks for 3DGS (docs/restoration_led.md). libtorch-free: the network is behind restoration/lens_detector.h.
 #pragma once
 
 #include <optional>

@@ -1,4 +1,4 @@
-// Training and calibration of the Lens Effect Detector on generated datasets (docs/restoration.md,
+// Training and calibration of the Lens Effect Detector on generated datasets (docs/restoration_led.md,
 // `weathergs train-led`, `make models`). libtorch-free.
 #pragma once
 
@@ -45,7 +45,7 @@ struct TrainLedOptions {
   LedMaskOptions mask;  // the post-processing the calibration assumes (threshold is ignored; dilations
                         // default to the released code's 3)
   // Also choose the dilation count (0..3) on the held-out views. Off by default: the IoU-best count
-  // (none) gave a higher mask IoU but worse WeatherGS reconstructions (docs/restoration.md).
+  // (none) gave a higher mask IoU but worse WeatherGS reconstructions (docs/restoration_led.md).
   bool calibrate_dilations = false;
   // Also calibrate the peak-relative rule and store it with the weights (detect's default rule then).
   bool calibrate_peak = false;

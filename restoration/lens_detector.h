@@ -1,4 +1,4 @@
-// The learned Lens Effect Detector (LED) of WeatherGS (docs/restoration.md): the attentive-recurrent
+// The learned Lens Effect Detector (LED) of WeatherGS (docs/restoration_led.md): the attentive-recurrent
 // network of AttentiveGAN (Qian et al., CVPR 2018), shrunk to run on 2 CPU cores. Each of N recurrent
 // steps takes cat(RGB, sharpness, previous attention), runs a strided conv, dilated residual blocks and a ConvLSTM,
 // and emits a 1-channel sigmoid attention map; the first attention is 0.5. Trained on the generator's
@@ -39,7 +39,7 @@ struct LedArchitecture {
   static LedArchitecture from_json(const JsonReader& r);
 };
 
-// The peak-relative threshold of the averaged attention (docs/restoration.md, "The peak-relative
+// The peak-relative threshold of the averaged attention (docs/restoration_led.md, "The peak-relative
 // rule"): every 8-connected region where m >= low whose maximum reaches seed keeps its pixels with
 // m >= max(low, fraction * maximum); regions whose maximum stays under seed are dropped. The network is
 // less sure of medium drops than of large ones (their peaks are lower), so one global threshold
@@ -115,7 +115,7 @@ class LensDetector {
   int dilate_iterations() const;
   void set_dilate_iterations(int n);
   // The calibrated peak-relative rule stored with the weights (`peak_rule` in <stem>.json), if any;
-  // `weathergs detect` uses it by default when present (docs/restoration.md).
+  // `weathergs detect` uses it by default when present (docs/restoration_led.md).
   const std::optional<LedPeakRule>& peak_rule() const;
   void set_peak_rule(const std::optional<LedPeakRule>& rule);
   const Json& metadata() const;  // the JSON read by load (empty for a fresh network)

@@ -5,7 +5,7 @@
 # fixed table walked by the index k, so the set is deterministic from its seeds (weather seed = 1000 *
 # scene index + k, the indices in SCENE_INDEX). EXTRA_SCENES=1 adds the scenes station and village
 # (indices 64 and 65: the weather mixes of 4 and 5 with seeds of their own), measured and not adopted
-# for the shipped LED (docs/restoration.md, "Two more training scenes"). Existing outputs are kept
+# for the shipped LED (docs/restoration_led_record.md, "Two more training scenes"). Existing outputs are kept
 # (the set is a cache: delete OUT to rebuild). Prints its size and time; writes OUT/manifest.json.
 # Overcast bases for the lens-drop detector: each scene's `wet` and `snowy` variants (overcast sky,
 # wet or snowy ground; the scenes' base lights are all sunny) rendered clear as <scene>_wet and
