@@ -19,7 +19,7 @@ DATA=${2:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]
 OUT=${3:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
 ITERATIONS=${4:-6000}   # the LED's iterations
 LED_WIDTH=${LED_WIDTH:-216}     # the LED's internal width (docs/restoration_led.md)
-LED_JITTER=${LED_JITTER:-0}     # its colour jitter (0.25 was tried: docs/restoration_led.md)
+LED_JITTER=${LED_JITTER:-0}     # its colour jitter (0.25 was tried: docs/restoration_led_record.md)
 LED_BALANCE=${LED_BALANCE:-0}   # its drop-size balance (--balance-drops; 0 = off)
 LED_HELD_SCENE=${LED_HELD_SCENE:-market}
 LED_SEED=${LED_SEED:-1}       # its training seed
