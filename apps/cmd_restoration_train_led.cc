@@ -13,11 +13,13 @@ struct TrainLedArgs {
   std::vector<std::string> data, held_out;
   std::string out;
   restoration::TrainLedOptions options;
+  std::string view_pooling = "none";
   std::string command;
 };
 
 int run(TrainLedArgs& a) {
   a.options.command = a.command;
+  a.options.train.arch.view_pooling = restoration::parse_led_view_pooling(a.view_pooling, "--view-pooling");
   const restoration::TrainLedResult r = restoration::train_led(a.data, a.held_out, a.out, a.options);
   std::printf("trained the LED on %zu views (%lld parameters) in %.1f s; loss %.4f -> %.4f\n", r.examples,
               static_cast<long long>(r.record.parameters), r.record.seconds,
@@ -56,6 +58,12 @@ Command make(CLI::App& root) {
   sub->add_option("--width", t.arch.width, "Internal width in pixels")->capture_default_str();
   sub->add_option("--channels", t.arch.channels, "Feature channels")->capture_default_str();
   sub->add_option("--steps", t.arch.steps, "Recurrent steps")->capture_default_str();
+  sub->add_option("--view-pooling", a->view_pooling,
+                  "What the views of one dataset share: none (each view alone), attention (the mean previous attention) "
+                  "or attention+state (and the ConvLSTM's mean state); pooled networks train on --batch views of one dataset "
+                  "(measured, not adopted: docs/restoration_led_record.md, \"Pooling over the views\")")
+      ->check(CLI::IsMember({"none", "attention", "attention+state"}))
+      ->capture_default_str();
   CLI::Option* dilate = sub->add_option("--dilate", a->options.mask.dilate_iterations,
                                         "3x3 dilations the threshold is calibrated for and stored with (default 3, the released code's)")
                             ->check(CLI::Range(0, restoration::kMaxDilations));

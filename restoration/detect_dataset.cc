@@ -137,6 +137,13 @@ std::vector<Image> attention_in_batches(const LensDetector& led, const std::vect
   return out;
 }
 
+// The views per network call: a view-pooling network sees all views of the dataset in one call
+// (one view at a time in per-view mode, where drops may slide), any other `batch`.
+int pooled_batch(const LensDetector& led, int batch, size_t views, bool per_view) {
+  if (led.architecture().view_pooling == LedViewPooling::kNone) return batch;
+  return per_view ? 1 : int(std::max<size_t>(1, views));
+}
+
 // Pixel-wise mean, summed in view order (a fixed summation order).
 Image average(const std::vector<Image>& maps) {
   Image sum(maps[0].width, maps[0].height, 1, ColorSpace::kLinear);
@@ -150,7 +157,7 @@ Image average(const std::vector<Image>& maps) {
 
 Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch) {
   if (views.empty()) throw InputError(where, "no views to average");
-  return average(attention_in_batches(led, views, where, batch, nullptr));
+  return average(attention_in_batches(led, views, where, pooled_batch(led, batch, views.size(), false), nullptr));
 }
 
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& o) {
@@ -188,7 +195,8 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   std::vector<Image> attention;
   {
     ProgressBar bar("detect lens drops", int64_t(images.size()));
-    attention = attention_in_batches(led, images, ds.root, o.batch, &bar);
+    attention = attention_in_batches(led, images, ds.root,
+                                     pooled_batch(led, o.batch, images.size(), o.averaging == LedAveraging::kPerView), &bar);
   }
   DetectDatasetReport report;
   report.mask = mask_options;

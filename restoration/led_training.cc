@@ -162,8 +162,11 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
     if (train_set.count(h)) throw InputError(h, "is both a training and a held-out dataset");
   TrainLedResult result;
   std::vector<LedExample> examples;
-  for (const std::string& d : train_datasets)
-    for (LedExample& e : read_led_examples(d)) examples.push_back(std::move(e));
+  for (size_t g = 0; g < train_datasets.size(); ++g)
+    for (LedExample& e : read_led_examples(train_datasets[g])) {
+      e.group = int(g);
+      examples.push_back(std::move(e));
+    }
   result.examples = examples.size();
   LensDetector led(o.train.arch, o.train.seed);
   result.record = led.train(examples, o.train);

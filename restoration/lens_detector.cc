@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <opencv2/imgproc.hpp>
 
 #include "core/atomic_file.h"
@@ -49,11 +50,13 @@ struct LedNetImpl : nn::Module {
 
   explicit LedNetImpl(const LedArchitecture& a) : arch(a) {
     const int ch = a.channels;
-    in = register_module("in", nn::Conv2d(nn::Conv2dOptions(kInputChannels + 1, ch, 3).padding(1)));
+    const bool pool_att = a.view_pooling != LedViewPooling::kNone;
+    const bool pool_state = a.view_pooling == LedViewPooling::kAttentionAndState;
+    in = register_module("in", nn::Conv2d(nn::Conv2dOptions(kInputChannels + 1 + (pool_att ? 1 : 0), ch, 3).padding(1)));
     down = register_module("down", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(1).stride(2)));
     blocks = register_module("blocks", nn::ModuleList());
     for (int b = 0; b < a.residual_blocks; ++b) blocks->push_back(ResidualBlock(ch, 1 << b));
-    lstm = register_module("lstm", nn::Conv2d(nn::Conv2dOptions(2 * ch, 4 * ch, 3).padding(1)));
+    lstm = register_module("lstm", nn::Conv2d(nn::Conv2dOptions((pool_state ? 3 : 2) * ch, 4 * ch, 3).padding(1)));
     out = register_module("out", nn::Conv2d(nn::Conv2dOptions(2 * ch, 1, 3).padding(1)));
     // Prior: drops cover a small part of a view. Starting the output at sigmoid(-2) ~ 0.12 (RetinaNet's
     // prior initialization) keeps training from first collapsing to "no drop anywhere".
@@ -61,21 +64,29 @@ struct LedNetImpl : nn::Module {
     out->bias.fill_(-2.0);
   }
 
-  // x: [B, 4, H, W] in [0, 1]. Returns the N attention maps [B, 1, H, W].
+  // The mean over the views (dimension 0) of the call, repeated for every view.
+  static torch::Tensor view_mean(const torch::Tensor& t) { return t.mean(0, true).expand_as(t); }
+
+  // x: [B, 4, H, W] in [0, 1]; with view pooling the B views are one dataset's. Returns the N
+  // attention maps [B, 1, H, W].
   std::vector<torch::Tensor> forward(const torch::Tensor& x) {
     const int64_t B = x.size(0), H = x.size(2), W = x.size(3);
+    const bool pool_att = arch.view_pooling != LedViewPooling::kNone;
+    const bool pool_state = arch.view_pooling == LedViewPooling::kAttentionAndState;
     torch::Tensor att = torch::full({B, 1, H, W}, 0.5f);
     torch::Tensor h, c;
     std::vector<torch::Tensor> maps;
     for (int t = 0; t < arch.steps; ++t) {
-      const torch::Tensor full = torch::relu(in(torch::cat({x, att}, 1)));
+      const torch::Tensor input = pool_att ? torch::cat({x, att, view_mean(att)}, 1) : torch::cat({x, att}, 1);
+      const torch::Tensor full = torch::relu(in(input));
       torch::Tensor f = torch::relu(down(full));
       for (const auto& b : *blocks) f = b->as<ResidualBlock>()->forward(f);
       if (t == 0) {
         h = torch::zeros_like(f);
         c = torch::zeros_like(f);
       }
-      const std::vector<torch::Tensor> g = lstm(torch::cat({f, h}, 1)).chunk(4, 1);
+      const torch::Tensor gates_in = pool_state ? torch::cat({f, h, view_mean(h)}, 1) : torch::cat({f, h}, 1);
+      const std::vector<torch::Tensor> g = lstm(gates_in).chunk(4, 1);
       c = torch::sigmoid(g[1]) * c + torch::sigmoid(g[0]) * torch::tanh(g[2]);
       h = torch::sigmoid(g[3]) * torch::tanh(c);
       const torch::Tensor up =
@@ -190,8 +201,27 @@ void LedArchitecture::validate() const {
     throw InputError("LED architecture residual_blocks", "expected 0..8, got " + std::to_string(residual_blocks));
 }
 
+const char* to_string(LedViewPooling p) {
+  switch (p) {
+    case LedViewPooling::kNone: return "none";
+    case LedViewPooling::kAttention: return "attention";
+    case LedViewPooling::kAttentionAndState: return "attention+state";
+  }
+  WGS_CHECK(false);
+  return "";
+}
+
+LedViewPooling parse_led_view_pooling(const std::string& s, const std::string& where) {
+  for (LedViewPooling p : {LedViewPooling::kNone, LedViewPooling::kAttention, LedViewPooling::kAttentionAndState})
+    if (s == to_string(p)) return p;
+  throw InputError(where, "expected none, attention or attention+state, got \"" + s + "\"");
+}
+
 Json LedArchitecture::to_json() const {
-  return {{"steps", steps}, {"width", width}, {"channels", channels}, {"residual_blocks", residual_blocks}};
+  Json j{{"steps", steps}, {"width", width}, {"channels", channels}, {"residual_blocks", residual_blocks}};
+  // Written only when used, so that the JSON of a per-view network reads as before.
+  if (view_pooling != LedViewPooling::kNone) j["view_pooling"] = to_string(view_pooling);
+  return j;
 }
 
 LedArchitecture LedArchitecture::from_json(const JsonReader& r) {
@@ -200,6 +230,7 @@ LedArchitecture LedArchitecture::from_json(const JsonReader& r) {
   a.width = r.get<int>("width");
   a.channels = r.get<int>("channels");
   a.residual_blocks = r.get<int>("residual_blocks");
+  if (r.has("view_pooling")) a.view_pooling = parse_led_view_pooling(r.get<std::string>("view_pooling"), "LED architecture view_pooling");
   r.finish();
   a.validate();
   return a;
@@ -327,13 +358,39 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
   rec.parameters = parameter_count();
   ProgressBar bar("train LED", o.iterations);
   double window = 0;
+  // A view-pooling network trains on `batch` distinct views of one group (dataset) per batch, all
+  // flipped alike (a lens-fixed drop stays where it is in every view).
+  const bool pooled = impl_->arch.view_pooling != LedViewPooling::kNone;
+  std::vector<std::vector<size_t>> groups;
+  if (pooled) {
+    std::map<int, std::vector<size_t>> by_group;
+    for (size_t i = 0; i < examples.size(); ++i) by_group[examples[i].group].push_back(i);
+    for (auto& [g, members] : by_group) {
+      if (int(members.size()) < o.batch)
+        throw InputError("LED training group " + std::to_string(g),
+                         "has " + std::to_string(members.size()) + " views, fewer than the batch of " + std::to_string(o.batch) +
+                             " a view-pooling network trains on");
+      groups.push_back(std::move(members));
+    }
+  }
   for (int it = 0; it < o.iterations; ++it) {
     // Batch and flips keyed on (seed, iteration): the same run whatever the thread count.
     Rng rng(o.seed, kStreamLedBatch, uint64_t(it));
     std::vector<torch::Tensor> bx, bm, bw;
+    std::vector<size_t> picks;
+    bool group_flip = false;
+    if (pooled) {
+      std::vector<size_t> members = groups[rng.uniform_int(uint32_t(groups.size()))];
+      for (int b = 0; b < o.batch; ++b) {  // partial Fisher-Yates: distinct views
+        const size_t j = size_t(b) + rng.uniform_int(uint32_t(members.size() - size_t(b)));
+        std::swap(members[size_t(b)], members[j]);
+        picks.push_back(members[size_t(b)]);
+      }
+      group_flip = rng.uniform() < 0.5f;
+    }
     for (int b = 0; b < o.batch; ++b) {
-      const size_t k = rng.uniform_int(uint32_t(xs.size()));
-      const bool flip = rng.uniform() < 0.5f;
+      const size_t k = pooled ? picks[size_t(b)] : rng.uniform_int(uint32_t(xs.size()));
+      const bool flip = pooled ? group_flip : rng.uniform() < 0.5f;
       torch::Tensor x = flip ? xs[k].flip({2}) : xs[k];
       if (o.colour_jitter > 0) {
         const float j = float(o.colour_jitter);

@@ -29,11 +29,23 @@ inline constexpr int kMaxDilations = 50;
 // n when 0 <= n <= kMaxDilations, else an InputError naming the LED's dilate_iterations.
 int checked_dilations(int n);
 
+// What the views of one network call share (docs/restoration_led_record.md, "Pooling over the views";
+// measured, not adopted):
+// kNone: every view on its own (the paper's network). kAttention: each recurrent step also sees the
+// mean of the previous attention over the views of the call. kAttentionAndState: and the ConvLSTM sees
+// the mean of its hidden state over them. A lens-fixed drop sits at the same place in every view, the
+// scene and the falling particles do not. A pooled network must be run on the views of one dataset
+// together (detect does), and is trained on batches of views of one dataset.
+enum class LedViewPooling { kNone, kAttention, kAttentionAndState };
+const char* to_string(LedViewPooling p);
+LedViewPooling parse_led_view_pooling(const std::string& s, const std::string& where);
+
 struct LedArchitecture {
   int steps = 4;           // recurrent steps (the paper's N)
   int width = 216;         // internal width in pixels (144 until 2026-11-26); the height keeps the aspect ratio
   int channels = 16;       // feature channels after the strided conv (and of the ConvLSTM state)
   int residual_blocks = 3; // dilations 1, 2, 4, ... (the receptive field must cover a defocused drop)
+  LedViewPooling view_pooling = LedViewPooling::kNone;  // `view_pooling` in the JSON (absent: none)
   void validate() const;   // InputError naming the field
   Json to_json() const;
   static LedArchitecture from_json(const JsonReader& r);
@@ -83,6 +95,7 @@ struct LedTrainOptions {
 struct LedExample {
   Image image;
   Image mask;
+  int group = 0;  // the dataset it comes from: a view-pooling network trains on one group per batch
 };
 
 struct LedTrainRecord {

@@ -23,6 +23,8 @@ LED_JITTER=${LED_JITTER:-0}     # its colour jitter (0.25 was tried: docs/restor
 LED_BALANCE=${LED_BALANCE:-0}   # its drop-size balance (--balance-drops; 0 = off)
 LED_HELD_SCENE=${LED_HELD_SCENE:-market}
 LED_SEED=${LED_SEED:-1}       # its training seed
+LED_BATCH=${LED_BATCH:-4}     # its views per iteration
+LED_POOLING=${LED_POOLING:-none}  # its --view-pooling (measured, not adopted: docs/restoration_led_record.md, "Pooling over the views")
 # Datasets and clear renders that train the LED only: the photographs, the overcast bases and the
 # scenes of EXTRA_SCENES=1 (scripts/make-training-data.sh).
 led_only() {
@@ -64,7 +66,7 @@ led_job() {
   if [ "$ONLY" = all ] || [ "$ONLY" = led ]; then
     echo "train-models: LED on ${#train[@]} datasets, calibrated on ${#held[@]} held out"
     "$BIN" --threads 1 train-led --data "${train[@]}" --held-out "${held[@]}" --out "$OUT/led/led" \
-      --iterations "$ITERATIONS" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --balance-drops "$LED_BALANCE" --calibrate-peak --seed "$LED_SEED" --threads 1
+      --iterations "$ITERATIONS" --batch "$LED_BATCH" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --balance-drops "$LED_BALANCE" --calibrate-peak --seed "$LED_SEED" --view-pooling "$LED_POOLING" --threads 1
   fi
   if [ "$ONLY" = all ] || [ "$ONLY" = aef ] || [ "$ONLY" = selector ]; then
     echo "train-models: weather selector on ${#aef_train[@]} datasets, theta calibrated on ${#aef_held[@]} held out"
