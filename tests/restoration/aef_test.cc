@@ -16,6 +16,7 @@
 #include "restoration/aef_training.h"
 #include "restoration/filter_dataset.h"
 #include "tests/core/test_util.h"
+#include "tests/restoration/restoration_test_util.h"
 #include "tests/generator/test_scene.h"
 
 namespace weathergs::restoration {
@@ -274,10 +275,7 @@ TEST(WeatherSelectorTest, TinyTrainingSeparatesRainSnowAndClear) {
   EXPECT_GE(right, 11);
 }
 
-int run_cli(const std::string& args, const std::string& log) {
-  const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet " + args + " > '" + log + "' 2>&1").c_str());
-  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
+using testing_util::run_cli;
 
 TEST(FilterLearnedTest, TasksOverridesReportAndBadInput) {
   testing::TempDir tmp;

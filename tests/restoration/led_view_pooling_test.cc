@@ -14,6 +14,7 @@
 #include "restoration/detect_dataset.h"
 #include "restoration/lens_detector.h"
 #include "tests/core/test_util.h"
+#include "tests/restoration/restoration_test_util.h"
 #include "tests/generator/test_scene.h"
 
 namespace weathergs::restoration {
@@ -24,21 +25,10 @@ namespace fs = std::filesystem;
 // A textured view (texture keyed on `index`: the scene moves between views) with two blurry bright
 // discs at places keyed on `layout` only (drops fixed to the lens), and their mask.
 LedExample lens_view(int w, int h, int layout, int index) {
-  LedExample e{Image(w, h, 3), Image(w, h, 1, ColorSpace::kLinear), layout};
-  Rng rng(11, uint64_t(layout), uint64_t(index));
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < 3; ++c) e.image.at(x, y, c) = 0.2f + 0.3f * rng.uniform();
-  const double cx[2] = {(0.25 + 0.1 * layout) * w, 0.7 * w}, cy[2] = {0.4 * h, (0.5 + 0.05 * layout) * h}, r = 0.12 * w;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int k = 0; k < 2; ++k) {
-        const double d = std::hypot(x + 0.5 - cx[k], y + 0.5 - cy[k]);
-        if (d < r) {
-          e.mask.at(x, y) = 1;
-          for (int c = 0; c < 3; ++c) e.image.at(x, y, c) = float(0.85 - 0.2 * d / r);
-        }
-      }
+  LedExample e = testing_util::textured_view_with_drops(
+      w, h, Rng(11, uint64_t(layout), uint64_t(index)), {{(0.25 + 0.1 * layout) * w, 0.4 * h}, {0.7 * w, (0.5 + 0.05 * layout) * h}},
+      0.12 * w);
+  e.group = layout;
   return e;
 }
 
@@ -166,30 +156,11 @@ TEST(LedViewPoolingTest, WeightsRecordThePoolingAndDetectRunsTheViewsTogether) {
   EXPECT_EQ(mean_attention(back, views, "views", 2).data, expect.data);
 }
 
-int run_cli(const std::string& args, const std::string& log) {
-  const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet " + args + " > '" + log + "' 2>&1").c_str());
-  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
+using testing_util::run_cli;
 
 // A dataset whose views carry the drops of `layout` (the same on every view) and masks/lens/ their masks.
 void make_drop_dataset(const std::string& dir, int views, int layout) {
-  testing::SceneOptions so;
-  so.views = views;
-  testing::make_clean_dataset(dir, so);
-  fs::create_directories(fs::path(dir) / "images");
-  fs::create_directories(fs::path(dir) / "masks/lens");
-  const Dataset ds = read_dataset(dir);
-  for (size_t i = 0; i < ds.cameras.size(); ++i) {
-    const Camera& c = ds.cameras[i];
-    const LedExample e = lens_view(c.width, c.height, layout, int(i));
-    Image img = read_image(ds.path(ImageKind::kClean, c.name));
-    for (int y = 0; y < c.height; ++y)
-      for (int x = 0; x < c.width; ++x)
-        if (e.mask.at(x, y) > 0)
-          for (int k = 0; k < 3; ++k) img.at(x, y, k) = e.image.at(x, y, k);
-    write_image(ds.path(ImageKind::kImages, c.name), img);
-    write_mask(ds.path(ImageKind::kLensMask, c.name), e.mask);
-  }
+  testing_util::make_drop_dataset(dir, views, [layout](int w, int h, int i) { return lens_view(w, h, layout, i); });
 }
 
 TEST(LedViewPoolingTest, TrainLedAndDetectFromTheCommandLine) {

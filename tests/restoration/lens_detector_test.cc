@@ -15,6 +15,7 @@
 #include "restoration/detect_dataset.h"
 #include "restoration/led_training.h"
 #include "tests/core/test_util.h"
+#include "tests/restoration/restoration_test_util.h"
 #include "tests/generator/test_scene.h"
 
 namespace weathergs::restoration {
@@ -24,23 +25,9 @@ namespace fs = std::filesystem;
 
 // A textured view with blurry bright discs at fixed places (drops on the lens) and their mask.
 LedExample toy_example(int w, int h, uint64_t seed, int index, bool drops) {
-  LedExample e{Image(w, h, 3), Image(w, h, 1, ColorSpace::kLinear)};
-  Rng rng(seed, 7, uint64_t(index));
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int c = 0; c < 3; ++c) e.image.at(x, y, c) = 0.2f + 0.3f * rng.uniform();
-  if (!drops) return e;
-  const double cx[2] = {0.3 * w, 0.7 * w}, cy[2] = {0.4 * h, 0.6 * h}, r = 0.12 * w;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      for (int k = 0; k < 2; ++k) {
-        const double d = std::hypot(x + 0.5 - cx[k], y + 0.5 - cy[k]);
-        if (d < r) {
-          e.mask.at(x, y) = 1;
-          for (int c = 0; c < 3; ++c) e.image.at(x, y, c) = float(0.85 - 0.2 * d / r);
-        }
-      }
-  return e;
+  std::vector<std::array<double, 2>> centres;
+  if (drops) centres = {{0.3 * w, 0.4 * h}, {0.7 * w, 0.6 * h}};
+  return testing_util::textured_view_with_drops(w, h, Rng(seed, 7, uint64_t(index)), centres, 0.12 * w);
 }
 
 LedArchitecture tiny_arch() {
@@ -361,30 +348,11 @@ TEST(LensDetectorTest, PeakRelativeRule) {
   EXPECT_THROW(o.validate(), InputError);
 }
 
-int run_cli(const std::string& args, const std::string& log) {
-  const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet " + args + " > '" + log + "' 2>&1").c_str());
-  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
+using testing_util::run_cli;
 
 // A dataset whose images/ carry the toy drops (the same on every view) and masks/lens/ their masks.
 void make_drop_dataset(const std::string& dir, int views, uint64_t seed) {
-  testing::SceneOptions so;
-  so.views = views;
-  testing::make_clean_dataset(dir, so);
-  fs::create_directories(fs::path(dir) / "images");
-  fs::create_directories(fs::path(dir) / "masks/lens");
-  const Dataset ds = read_dataset(dir);
-  for (size_t i = 0; i < ds.cameras.size(); ++i) {
-    const Camera& c = ds.cameras[i];
-    const LedExample e = toy_example(c.width, c.height, seed, int(i), true);
-    Image img = read_image(ds.path(ImageKind::kClean, c.name));
-    for (int y = 0; y < c.height; ++y)
-      for (int x = 0; x < c.width; ++x)
-        if (e.mask.at(x, y) > 0)
-          for (int k = 0; k < 3; ++k) img.at(x, y, k) = e.image.at(x, y, k);
-    write_image(ds.path(ImageKind::kImages, c.name), img);
-    write_mask(ds.path(ImageKind::kLensMask, c.name), e.mask);
-  }
+  testing_util::make_drop_dataset(dir, views, [seed](int w, int h, int i) { return toy_example(w, h, seed, i, true); });
 }
 
 TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {

@@ -11,6 +11,7 @@
 #include "core/rng.h"
 #include "restoration/filter_dataset.h"
 #include "tests/core/test_util.h"
+#include "tests/restoration/restoration_test_util.h"
 #include "tests/generator/test_scene.h"
 
 namespace weathergs::restoration {
@@ -106,10 +107,7 @@ TEST(ParticleFilterTest, ExtremeAndBadInputs) {
   EXPECT_THROW(o.validate(), InputError);
 }
 
-int run_cli(const std::string& args, const std::string& log) {
-  const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet " + args + " > '" + log + "' 2>&1").c_str());
-  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
+using testing_util::run_cli;
 
 TEST(FilterDatasetTest, EveryViewFilteredWithAReportAndNothingOnBadInput) {
   testing::TempDir tmp;
