@@ -45,13 +45,16 @@ constexpr int kInputChannels = 4;  // RGB + sharpness (to_tensor)
 // ConvLSTM -> upsample -> conv over cat(state, full-res features) -> sigmoid.
 struct LedNetImpl : nn::Module {
   LedArchitecture arch;
+  const bool pool_att;    // the mean attention over the call's views is an input (LedViewPooling)
+  const bool pool_state;  // and the ConvLSTM's mean state
   nn::Conv2d in{nullptr}, down{nullptr}, lstm{nullptr}, out{nullptr};
   nn::ModuleList blocks;
 
-  explicit LedNetImpl(const LedArchitecture& a) : arch(a) {
+  explicit LedNetImpl(const LedArchitecture& a)
+      : arch(a),
+        pool_att(a.view_pooling != LedViewPooling::kNone),
+        pool_state(a.view_pooling == LedViewPooling::kAttentionAndState) {
     const int ch = a.channels;
-    const bool pool_att = a.view_pooling != LedViewPooling::kNone;
-    const bool pool_state = a.view_pooling == LedViewPooling::kAttentionAndState;
     in = register_module("in", nn::Conv2d(nn::Conv2dOptions(kInputChannels + 1 + (pool_att ? 1 : 0), ch, 3).padding(1)));
     down = register_module("down", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(1).stride(2)));
     blocks = register_module("blocks", nn::ModuleList());
@@ -71,8 +74,6 @@ struct LedNetImpl : nn::Module {
   // attention maps [B, 1, H, W].
   std::vector<torch::Tensor> forward(const torch::Tensor& x) {
     const int64_t B = x.size(0), H = x.size(2), W = x.size(3);
-    const bool pool_att = arch.view_pooling != LedViewPooling::kNone;
-    const bool pool_state = arch.view_pooling == LedViewPooling::kAttentionAndState;
     torch::Tensor att = torch::full({B, 1, H, W}, 0.5f);
     torch::Tensor h, c;
     std::vector<torch::Tensor> maps;

@@ -4,18 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 
 #include "core/atomic_file.h"
-#include "core/dataset.h"
 #include "core/json_reader.h"
 #include "core/rng.h"
 #include "restoration/detect_dataset.h"
 #include "restoration/lens_detector.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
-#include "tests/generator/test_scene.h"
 
 namespace weathergs::restoration {
 namespace {

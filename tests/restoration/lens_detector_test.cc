@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -16,7 +15,6 @@
 #include "restoration/led_training.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
-#include "tests/generator/test_scene.h"
 
 namespace weathergs::restoration {
 namespace {
