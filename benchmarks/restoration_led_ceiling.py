@@ -15,7 +15,7 @@ mask a perfect core detector would write after n dilations (a morphological open
 every drop wider than 2n + 1 px at its shape). With 3 dilations this is the relevant ceiling.
 
 Usage: restoration_led_ceiling.py DATASET [DATASET ...]   (generated datasets with masks/lens/)
-Results: docs/restoration_led.md ("What the post-processing allows").
+Results: docs/restoration_led_targets.md ("What the post-processing allows").
 """
 import json
 import sys

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Where the LED's masks lose against the cores ceiling (issue 11; docs/restoration_led.md, "What the
-post-processing allows"). For each rain variant of the two quick suites, the mask `weathergs detect`
+"""Where the LED's masks lose against the cores ceiling (issue 11; docs/restoration_led_targets.md, "What
+the post-processing allows"). For each rain variant of the two quick suites, the mask `weathergs detect`
 wrote is scored (IoU / precision pooled over the training views, as detect scores it):
   - as it is;
   - with every missed drop of the majority truth (a component less than 30 % covered by the mask)

@@ -7,8 +7,8 @@ never sees at that resolution: the mean |Laplacian| of the luminance (a lens-fix
 place in every view), the per-pixel standard deviation over the views, and the gradient of the mean
 view against the mean of the views' gradients (edges that stay put). Each cue enters alone and times
 a, so it can move the map's boundary. Target: the per-pixel majority of the training views' truth,
-eroded three times (the core that the three 3x3 dilations grow back; docs/restoration_led.md, "What the
-post-processing allows"). The probability threshold is chosen for the mean IoU after the three
+eroded three times (the core that the three 3x3 dilations grow back; docs/restoration_led_targets.md,
+"What the post-processing allows"). The probability threshold is chosen for the mean IoU after the three
 dilations, like `calibrate-led`.
 
 Scored two ways: cross-fitted on the held-out datasets (two fixed halves: fit and threshold on one,
