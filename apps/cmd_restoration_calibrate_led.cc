@@ -14,12 +14,13 @@ struct CalibrateLedArgs {
   std::string weights, out;
   std::vector<std::string> held_out;
   bool peak = false;
+  std::optional<int> width;
   std::string command;
 };
 
 int run(const CalibrateLedArgs& a) {
   const std::string weights = find_led_weights(a.weights);
-  const restoration::LedCalibration c = restoration::recalibrate_led(weights, a.held_out, a.out, a.peak, a.command);
+  const restoration::LedCalibration c = restoration::recalibrate_led(weights, a.held_out, a.out, a.peak, a.command, a.width);
   std::printf("calibrated threshold %.3f for %d dilations: mean IoU %.3f over held-out datasets with drops\n", c.threshold,
               c.dilate_iterations, c.mean_iou);
   print_led_scores(c.scores);
@@ -44,6 +45,8 @@ Command make(CLI::App& root) {
   sub->add_option("--held-out", a->held_out, "Held-out datasets with masks/lens (never trained on)")->required();
   sub->add_option("--out", a->out, "Output weights stem: writes <stem>.json and <stem>.bin")->required();
   sub->add_flag("--peak", a->peak, "Also calibrate the peak-relative rule and store it (detect's default rule then)");
+  sub->add_option("--width", a->width,
+                  "Run the same network at this internal width from now on (16..2048 px; default: the weights' own)");
   return {sub, [a, sub] {
             a->command = recorded_command("calibrate-led", *sub);
             return run(*a);

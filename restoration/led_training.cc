@@ -137,9 +137,12 @@ Json calibration_json(const LedCalibration& c, const std::vector<std::string>& h
 }
 
 LedCalibration recalibrate_led(const std::string& weights_stem, const std::vector<std::string>& held_out,
-                               const std::string& out_stem, bool search_peak, const std::string& command) {
+                               const std::string& out_stem, bool search_peak, const std::string& command,
+                               std::optional<int> width) {
   if (held_out.empty()) throw InputError("calibrate-led", "needs at least one --held-out dataset");
   LensDetector led = LensDetector::load(weights_stem);
+  const int width_before = led.architecture().width;
+  if (width) led.set_width(*width);
   LedMaskOptions mo;
   mo.dilate_iterations = led.dilate_iterations();
   const LedCalibration c = calibrate_led(led, held_out, mo, false, search_peak);
@@ -148,6 +151,7 @@ LedCalibration recalibrate_led(const std::string& weights_stem, const std::vecto
   if (extra.contains("calibration")) extra["previous_calibration"] = extra["calibration"];
   extra["calibration"] = calibration_json(c, held_out, kThresholdGrid);
   extra["calibration"]["command"] = command;
+  if (led.architecture().width != width_before) extra["calibration"]["width_changed_from"] = width_before;
   led.save(out_stem, extra);
   return c;
 }

@@ -64,7 +64,10 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
 // `weathergs calibrate-led`: calibrates trained weights again on `held_out` (threshold for the weights'
 // dilation count, and the peak rule with search_peak) and writes them to out_stem: the same network
 // (same blob and sha256), a new calibration; the previous one is kept as "previous_calibration".
+// With `width`, the network is run (and calibrated) at that internal width from then on; the
+// calibration records the width it had before as "width_changed_from".
 LedCalibration recalibrate_led(const std::string& weights_stem, const std::vector<std::string>& held_out,
-                               const std::string& out_stem, bool search_peak, const std::string& command);
+                               const std::string& out_stem, bool search_peak, const std::string& command,
+                               std::optional<int> width = std::nullopt);
 
 }  // namespace weathergs::restoration

@@ -293,6 +293,12 @@ LensDetector::LensDetector(const LedArchitecture& arch, uint64_t seed) : impl_(s
 }
 
 const LedArchitecture& LensDetector::architecture() const { return impl_->arch; }
+void LensDetector::set_width(int width) {
+  LedArchitecture a = impl_->arch;
+  a.width = width;
+  a.validate();
+  impl_->arch = a;
+}
 double LensDetector::threshold() const { return impl_->threshold; }
 void LensDetector::set_threshold(double t) {
   if (!(t > 0 && t < 1)) throw InputError("LED threshold", "expected in (0, 1), got " + std::to_string(t));

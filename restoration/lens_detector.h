@@ -119,6 +119,10 @@ class LensDetector {
   void save(const std::string& stem, const Json& extra) const;
 
   const LedArchitecture& architecture() const;
+  // Runs the same network at another internal width (no parameter depends on it; a larger width
+  // enlarges every drop inside the network; docs/restoration_led_record.md, "Run at width 252").
+  // InputError outside 16..2048.
+  void set_width(int width);
   int64_t parameter_count() const;
   // The calibrated threshold stored with the weights (0.5 until calibrated).
   double threshold() const;

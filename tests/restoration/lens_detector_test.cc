@@ -485,6 +485,30 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
   EXPECT_EQ(rp.at("rule"), "peak");
   EXPECT_EQ(rp.at("peak_rule"), pk.at("peak_rule"));
   EXPECT_NEAR(rp.at("ground_truth").at("iou").get<double>(), pk.at("calibration").at("peak_rule").at("mean_iou").get<double>(), 1e-9);
+  {  // calibrate-led --width: the same blob run at another internal width from then on (recorded, with
+     // the width it had before); detect runs it; a width outside 16..2048 is exit 2, nothing written.
+    ASSERT_EQ(run_cli("calibrate-led --weights " + (tmp / "pk") + " --held-out " + (tmp / "held") + " --width 64 --peak --out " +
+                          (tmp / "wide"), tmp / "wide.log"), 0) << read_file(tmp / "wide.log");
+    EXPECT_EQ(read_file(tmp / "wide.bin"), read_file(tmp / "w.bin"));
+    const Json wide = read_json_file(tmp / "wide.json");
+    EXPECT_EQ(wide.at("architecture").at("width"), 64);
+    EXPECT_EQ(wide.at("calibration").at("width_changed_from"), 48);
+    EXPECT_EQ(wide.at("weights_sha256"), pk.at("weights_sha256"));
+    EXPECT_NE(wide.at("calibration").at("command").get<std::string>().find(" --width 64"), std::string::npos);
+    ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "wide") + " --out " + (tmp / "mw"), tmp / "mw.log"), 0)
+        << read_file(tmp / "mw.log");
+    EXPECT_NEAR(read_json_file(tmp / "mw/detect.json").at("ground_truth").at("iou").get<double>(),
+                wide.at("calibration").at("peak_rule").at("mean_iou").get<double>(), 1e-9);
+    ASSERT_EQ(run_cli("calibrate-led --weights " + (tmp / "wide") + " --held-out " + (tmp / "held") + " --out " + (tmp / "again"),
+                      tmp / "again.log"), 0) << read_file(tmp / "again.log");
+    EXPECT_EQ(read_json_file(tmp / "again.json").at("architecture").at("width"), 64);  // kept without --width
+    EXPECT_FALSE(read_json_file(tmp / "again.json").at("calibration").contains("width_changed_from"));
+    EXPECT_EQ(run_cli("calibrate-led --weights " + (tmp / "pk") + " --held-out " + (tmp / "held") + " --width 8 --out " + (tmp / "narrow"),
+                      tmp / "narrow.log"), 2);
+    EXPECT_NE(read_file(tmp / "narrow.log").find("width"), std::string::npos) << read_file(tmp / "narrow.log");
+    EXPECT_FALSE(fs::exists(tmp / "narrow.json"));
+    EXPECT_FALSE(fs::exists(tmp / "narrow.bin"));
+  }
   // --threshold on such weights means the global rule again.
   ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "pk") + " --threshold 0.5 --out " + (tmp / "mt"), tmp / "mt.log"), 0);
   EXPECT_EQ(read_json_file(tmp / "mt/detect.json").at("rule"), "above");
