@@ -1,6 +1,7 @@
 // `weathergs calibrate-led`: calibrates trained LED weights again on held-out datasets (docs/restoration_led.md).
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "apps/command.h"
 #include "apps/led_scores.h"

@@ -18,7 +18,8 @@
 # LENS_MASK_RULE (default perceptible, the generator's default) sets the lens drops' `mask_rule`, the
 # LED's target: `coverage` makes masks/lens/ the drops' blurred lens coverage >= 0.1 instead of where
 # they change the view by more than 4 levels (docs/lens_droplets.md); measured, not adopted
-# (docs/restoration_led.md, "Where the drops are, not where they show").
+# (docs/restoration_led_targets.md, "Where the drops are, not where they show"). An OUT made with
+# the other rule is an error (its cached datasets would mix the two).
 #
 #   scripts/make-training-data.sh BUILD/apps/weathergs OUT [WEATHERS=12] [PROFILE=quick]
 set -euo pipefail
@@ -37,6 +38,14 @@ case $LENS_MASK_RULE in
   coverage) MASK_RULE_KEY=", \"mask_rule\": \"coverage\"" ;;
   *) echo "make-training-data: LENS_MASK_RULE must be perceptible or coverage, not '$LENS_MASK_RULE'" >&2; exit 2 ;;
 esac
+if [ -f "$OUT/manifest.json" ]; then  # a set written before the key existed is perceptible
+  made_with=$(grep -o '"lens_mask_rule": "[a-z]*"' "$OUT/manifest.json" | cut -d'"' -f4 || true)
+  if [ "${made_with:-perceptible}" != "$LENS_MASK_RULE" ]; then
+    echo "make-training-data: $OUT/manifest.json: the set was made with lens_mask_rule ${made_with:-perceptible}," \
+      "not $LENS_MASK_RULE; use another OUT or delete this one" >&2
+    exit 2
+  fi
+fi
 VARIANTS=(wet snowy)
 VARIANT_WEATHERS=${VARIANT_WEATHERS:-12}
 MATE=/usr/share/backgrounds/mate/nature
