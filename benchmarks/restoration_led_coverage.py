@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The LED's masks scored against where the drops are on the lens, not only where they show (issue 11;
-docs/restoration_led.md, "Where the drops are, not where they show").
+docs/restoration_led_targets.md, "Where the drops are, not where they show").
 
 masks/lens/ (the generator's default `perceptible` rule) counts a pixel where the drops change that
 view's 8-bit image by more than 4 levels, so it moves from view to view with the scene behind a drop,

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""The LED on many drop layouts of the benchmark scenes (issue 11; docs/restoration_led.md, "One drop
-layout").
+"""The LED on many drop layouts of the benchmark scenes (issue 11; docs/restoration_led_targets.md,
+"One drop layout").
 
 The three paper-style rain variants use the same weather seed (7), and the lens drops are fixed to the
 lens, so all three carry the same 20 drops: the benchmark scores the LED on one drop layout seen over
