@@ -49,6 +49,10 @@ int run(DetectArgs& a) {
   if (r.ground_truth)
     std::printf("against the dataset's masks/lens: IoU %.3f  precision %.3f  recall %.3f (drops on %.2f%% of the pixels)\n",
                 r.ground_truth->iou, r.ground_truth->precision, r.ground_truth->recall, 100 * r.ground_truth->gt_fraction);
+  if (r.coverage_truth)
+    std::printf("against the drops' lens coverage >= %.2f: IoU %.3f  precision %.3f  recall %.3f (drops on %.2f%% of the pixels)\n",
+                r.coverage_threshold, r.coverage_truth->iou, r.coverage_truth->precision, r.coverage_truth->recall,
+                100 * r.coverage_truth->gt_fraction);
   return kExitOk;
 }
 

@@ -17,6 +17,7 @@ inline constexpr const char* kDepthDir = "depth";      // planar depth of the cl
 inline constexpr const char* kLensMaskDir = "masks/lens";
 inline constexpr const char* kParticleMaskDir = "masks/particles";
 inline constexpr const char* kLayersDir = "layers";    // optional float layers: layers/<name>/<view>.exr
+inline constexpr const char* kLensCoverageLayer = "lens_coverage";  // the lens drops' blurred coverage, [0, 1]
 // Restoration targets of the generator (optional): the weathered view without the particles (every
 // other effect on), and the clean view with only the lens drops.
 inline constexpr const char* kTargetNoParticlesDir = "targets/no_particles";

@@ -120,6 +120,31 @@ LedScore score_lens_masks(const std::string& name, const std::vector<Image>& pre
 
 namespace {
 
+// The coverage-rule threshold of the dataset's resolved lens spec (generator.spec.effects.lens_droplets
+// .mask_threshold), when it was generated with lens drops.
+std::optional<double> coverage_rule_threshold(const Dataset& ds) {
+  if (!ds.info.generator) return std::nullopt;
+  const Json::json_pointer at("/spec/effects/lens_droplets/mask_threshold");
+  if (!ds.info.generator->contains(at) || !ds.info.generator->at(at).is_number()) return std::nullopt;
+  return ds.info.generator->at(at).get<double>();
+}
+
+// One view's lens coverage layer as a {0, 1} mask: coverage >= threshold (the generator's coverage rule).
+Image coverage_mask(const std::string& path, double threshold, const Camera& c) {
+  const Image cov = read_image(path);
+  if (cov.width != c.width || cov.height != c.height)
+    throw InputError(path, "expected a " + std::to_string(c.width) + "x" + std::to_string(c.height) + " coverage layer (the view's size), got " +
+                               std::to_string(cov.width) + "x" + std::to_string(cov.height));
+  Image m(cov.width, cov.height, 1);
+  for (size_t i = 0; i < m.data.size(); ++i) m.data[i] = cov.data[i * size_t(cov.channels)] >= threshold ? 1.f : 0.f;
+  return m;
+}
+
+Json score_json(const std::string& what, const LedScore& g, size_t views) {
+  return {{"masks", what}, {"views", views}, {"iou", g.iou}, {"precision", g.precision}, {"recall", g.recall},
+          {"gt_fraction", g.gt_fraction}, {"mask_fraction", g.mask_fraction}};
+}
+
 // The network over `views` in chunks of `batch`, results in view order. The chunks run in parallel,
 // each on one libtorch thread (LensDetector::attention): a chunk's maps do not depend on which thread
 // ran it, so the output does not depend on the thread count (test restoration/lens_detector), and
@@ -205,6 +230,8 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   if (o.save_attention) fs::create_directories(fs::path(dir.path()) / kDetectAttentionDir);
   Json views = Json::array();
   std::vector<Image> scored_masks, scored_truth;  // ground truth: the averaged (or every) view
+  std::vector<Image> coverage_masks, coverage_truth;  // the same against the lens coverage
+  const std::optional<double> coverage_threshold = coverage_rule_threshold(ds);
   const std::set<std::string> averaged_set(names.begin(), names.end());
   size_t k = 0;
   for (const Camera& c : ds.cameras) {
@@ -228,15 +255,26 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
       scored_truth.push_back(read_mask(ds.path(ImageKind::kLensMask, c.name)));
       scored_masks.push_back(mask);
     }
+    const std::string coverage_path = ds.layer_path(layout::kLensCoverageLayer, c.name);
+    if (coverage_threshold && averaged_set.count(c.name) && fs::exists(coverage_path)) {
+      coverage_truth.push_back(coverage_mask(coverage_path, *coverage_threshold, c));
+      coverage_masks.push_back(mask);
+    }
     views.push_back({{"view", v.view}, {"mask_fraction", v.mask_fraction}, {"mean_attention", v.mean_attention}});
     report.views.push_back(v);
   }
   Json gt_json;
   if (!scored_truth.empty() && scored_truth.size() == averaged_set.size()) {
     report.ground_truth = score_lens_masks(ds.info.name, scored_masks, scored_truth);
-    const LedScore& g = *report.ground_truth;
-    gt_json = {{"masks", layout::kLensMaskDir}, {"views", scored_truth.size()}, {"iou", g.iou}, {"precision", g.precision},
-               {"recall", g.recall}, {"gt_fraction", g.gt_fraction}, {"mask_fraction", g.mask_fraction}};
+    gt_json = score_json(layout::kLensMaskDir, *report.ground_truth, scored_truth.size());
+  }
+  Json coverage_json;
+  if (!coverage_truth.empty() && coverage_truth.size() == averaged_set.size()) {
+    report.coverage_truth = score_lens_masks(ds.info.name, coverage_masks, coverage_truth);
+    report.coverage_threshold = *coverage_threshold;
+    coverage_json = score_json(std::string(layout::kLayersDir) + "/" + layout::kLensCoverageLayer, *report.coverage_truth,
+                               coverage_truth.size());
+    coverage_json["threshold"] = *coverage_threshold;
   }
   report.seconds = seconds_since(start);
   const Json j{{"format", "weathergs-detect"},
@@ -254,6 +292,7 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
                {"dilate_iterations", *mask_options.dilate_iterations},
                {"attention", o.save_attention ? Json(kDetectAttentionDir) : Json()},
                {"ground_truth", gt_json},
+               {"ground_truth_coverage", coverage_json},
                {"seconds", report.seconds},
                {"seconds_per_view", report.seconds_per_view},
                {"views", views}};

@@ -78,6 +78,12 @@ struct DetectDatasetReport {
   double seconds_per_view = 0;          // network time only
   std::optional<LedScore> ground_truth; // when the dataset has masks/lens: over the averaged views
                                         // (train views), or every view with per-view averaging
+  // Against where the drops are rather than where they show: the lens coverage layer at or above
+  // the dataset's coverage-rule threshold (its resolved lens_droplets.mask_threshold), over the same
+  // views, when the dataset has layers/lens_coverage/ for all of them (docs/restoration_led_targets.md,
+  // "Where the drops are, not where they show").
+  std::optional<LedScore> coverage_truth;
+  double coverage_threshold = 0;
 };
 
 // Writes <out>/<view>.png for every view (255 = excluded from the loss, the dataset's mask convention)

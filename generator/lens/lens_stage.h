@@ -3,7 +3,7 @@
 // the drops and the drops are never hidden behind particles.
 //
 // Per view the stage replaces view.radiance with the composited image and leaves:
-//   view.layers["lens_coverage"]  float coverage in [0, 1]   -> layers/lens_coverage/<view>.exr
+//   view.layers[layout::kLensCoverageLayer] ("lens_coverage")  float coverage in [0, 1]  -> layers/lens_coverage/<view>.exr
 //   view.lens_mask                {0, 1}                     -> masks/lens/<view>.png
 //   view.lens_drops               the per-view drop list     -> dataset.json generator.lens_droplets
 #pragma once

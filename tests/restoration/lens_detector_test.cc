@@ -525,5 +525,46 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
   EXPECT_FALSE(fs::exists(tmp / "pk2.bin"));
 }
 
+// detect also scores against where the drops are (the lens coverage layer at the dataset's
+// coverage-rule threshold) when the dataset has that layer and a generator spec; with a coverage
+// layer whose rule gives back masks/lens the two scores agree. A layer of the wrong size is exit 2.
+TEST(DetectDatasetTest, ScoresAgainstTheLensCoverageWhenTheDatasetHasIt) {
+  testing::TempDir tmp;
+  make_drop_dataset(tmp / "d", 6, 3);
+  ASSERT_EQ(run_cli("--threads 1 train-led --data " + (tmp / "d") + " --out " + (tmp / "w") +
+                        " --iterations 5 --width 48 --channels 4 --steps 2", tmp / "t.log"), 0)
+      << read_file(tmp / "t.log");
+  const std::string detect = "detect --data " + (tmp / "d") + " --weights " + (tmp / "w") + " --out ";
+  ASSERT_EQ(run_cli(detect + (tmp / "m0"), tmp / "m0.log"), 0) << read_file(tmp / "m0.log");
+  EXPECT_TRUE(read_json_file(tmp / "m0/detect.json").at("ground_truth_coverage").is_null());  // no layer, no spec
+
+  Json dj = read_json_file(tmp / "d/dataset.json");
+  dj["generator"] = Json{{"spec", {{"effects", {{"lens_droplets", {{"mask_threshold", 0.25}}}}}}}};
+  write_file_atomic(tmp / "d/dataset.json", dj.dump(2));
+  const Dataset ds = read_dataset(tmp / "d");
+  for (const Camera& c : ds.cameras) {
+    const Image m = read_mask(ds.path(ImageKind::kLensMask, c.name));
+    Image cov(m.width, m.height, 1, ColorSpace::kLinear);
+    for (size_t i = 0; i < cov.data.size(); ++i) cov.data[i] = m.data[i] > 0.5f ? 0.25f : 0.2499f;  // the rule's edge
+    fs::create_directories(fs::path(ds.layer_path(layout::kLensCoverageLayer, c.name)).parent_path());
+    write_image(ds.layer_path(layout::kLensCoverageLayer, c.name), cov, {PixelFormat::kFloat32, {}});
+  }
+  ASSERT_EQ(run_cli(detect + (tmp / "m1"), tmp / "m1.log"), 0) << read_file(tmp / "m1.log");
+  const Json r = read_json_file(tmp / "m1/detect.json");
+  const Json& cov = r.at("ground_truth_coverage");
+  ASSERT_TRUE(cov.is_object()) << r.dump(2);
+  EXPECT_EQ(cov.at("masks"), "layers/lens_coverage");
+  EXPECT_DOUBLE_EQ(cov.at("threshold").get<double>(), 0.25);
+  for (const char* k : {"iou", "precision", "recall", "gt_fraction", "mask_fraction", "views"}) EXPECT_EQ(cov.at(k), r.at("ground_truth").at(k)) << k;
+  EXPECT_NE(read_file(tmp / "m1.log").find("lens coverage >= 0.25"), std::string::npos) << read_file(tmp / "m1.log");
+
+  const std::string view = ds.split("train")[0];
+  write_image(ds.layer_path(layout::kLensCoverageLayer, view), Image(8, 8, 1, ColorSpace::kLinear), {PixelFormat::kFloat32, {}});
+  EXPECT_EQ(run_cli(detect + (tmp / "m2"), tmp / "m2.log"), 2);
+  EXPECT_NE(read_file(tmp / "m2.log").find(layout::kLensCoverageLayer + std::string("/") + view), std::string::npos)
+      << read_file(tmp / "m2.log");
+  EXPECT_FALSE(fs::exists(tmp / "m2"));
+}
+
 }  // namespace
 }  // namespace weathergs::restoration
