@@ -185,7 +185,7 @@ TEST(Targets, WithLensDropsTheTargetsKeepTheSameDrops) {
     const Image lens_only = read_image(d.path(ImageKind::kTargetLensOnly, c.name));
     const Image no_particles = read_image(d.path(ImageKind::kTargetNoParticles, c.name));
     const Image clean = read_image(d.path(ImageKind::kClean, c.name));
-    const Image coverage = read_image(d.layer_path("lens_coverage", c.name));
+    const Image coverage = read_image(d.layer_path(layout::kLensCoverageLayer, c.name));
     const Image mask = read_mask(d.path(ImageKind::kLensMask, c.name));
     // Without fog the no-particle target is exactly the lens-only target (same drops, same seed).
     EXPECT_EQ(read_file(d.path(ImageKind::kTargetLensOnly, c.name)), read_file(d.path(ImageKind::kTargetNoParticles, c.name)));

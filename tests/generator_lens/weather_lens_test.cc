@@ -62,7 +62,7 @@ TEST(WeatherLens, AloneThroughTheCommandWritesGroundTruth) {
     // Lens-attached: the same drops in every view.
     EXPECT_EQ(views[i]["drops"].dump(), views[0]["drops"].dump());
     const Image mask = read_mask(out.path(ImageKind::kLensMask, v));
-    const Image coverage = read_image(out.layer_path("lens_coverage", v, ".exr"));
+    const Image coverage = read_image(out.layer_path(layout::kLensCoverageLayer, v, ".exr"));
     const Image img = read_image(out.path(ImageKind::kImages, v)), clean = read_image(out.path(ImageKind::kClean, v));
     ASSERT_EQ(mask.width, out.cameras[i].width);
     ASSERT_EQ(coverage.channels, 1);
