@@ -8,8 +8,8 @@ three backgrounds, and one medium drop missed or found moves a variant's IoU by 
 re-weathers each variant with other seeds (`weathergs weather --in data/suite_paper/<scene>_rain --spec
 <the scene's rain spec> --seed S`: the same scene, camera and rain intensity, new drops and streaks),
 runs `weathergs detect` on each (the default post-processing) and prints IoU / precision against
-masks/lens (the `perceptible` truth, what `detect` reports) and against the drops' lens coverage >= 0.1
-(restoration_led_coverage.py), per dataset, then the mean and standard deviation over the seeds.
+masks/lens (the `perceptible` truth) and against the drops' lens coverage >= 0.1 (both as `detect`
+reports them in detect.json), per dataset, then the mean and standard deviation over the seeds.
 
 Usage: restoration_led_layouts.py WEATHERGS OUT [--seeds 101-108] [--weights STEM] [--suite data/suite_paper]
   Run in the repository root (the suite and scenes/ are read from there). Datasets and masks are
@@ -22,14 +22,8 @@ import subprocess
 import sys
 
 import numpy as np
-from PIL import Image
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from restoration_led_ceiling import score  # noqa: E402
-from restoration_led_coverage import coverage  # noqa: E402
 
 SCENES = ("pool", "tanabata", "factory")
-COVERAGE_THRESHOLD = 0.1  # the generator's coverage rule (docs/lens_droplets.md)
 TARGET_IOU, TARGET_PRECISION = 0.7, 0.8  # issue 11
 
 
@@ -90,10 +84,8 @@ def main():
             subprocess.run([args.weathergs, "--quiet", "detect", "--data", d, "--out", m]
                            + (["--weights", args.weights] if args.weights else []), check=True, stdout=subprocess.DEVNULL)
             report = json.load(open(os.path.join(m, "detect.json")))
-            g = report["ground_truth"]
-            views = json.load(open(os.path.join(d, "dataset.json")))["splits"]["train"]
-            mask = np.asarray(Image.open(os.path.join(m, views[0] + ".png")).convert("L")) > 127
-            ci, cp = score(coverage(d) >= COVERAGE_THRESHOLD, mask)
+            g, c = report["ground_truth"], report["ground_truth_coverage"]  # detect scores both truths
+            ci, cp = c["iou"], c["precision"]
             rows[scene].append((g["iou"], g["precision"], ci, cp))
             print(f"| {scene}_rain | {seed} | {g['iou']:.3f} / {g['precision']:.3f} | {ci:.3f} / {cp:.3f} |", flush=True)
     print()
