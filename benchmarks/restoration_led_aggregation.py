@@ -23,11 +23,17 @@ import numpy as np
 from PIL import Image
 
 from restoration_led_ceiling import dilate, score
-from restoration_led_ensemble import PEAK_GRID, T_GRID, rule_peak, rule_t, truths
+from restoration_led_ensemble import PEAK_GRID, T_GRID, rule_peak, rule_t, truths, variant_name
 
 DILATIONS = 3
 PRECISION_TARGET = 0.8
-SHIPPED_PEAK = (0.3, 0.3, 0.7)  # models/led/led.json's calibrated rule
+SHIPPED_WEIGHTS = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "models", "led", "led.json")
+
+
+def shipped_peak_rule():
+    """(low, seed, fraction): the peak rule calibrated and stored with the shipped weights."""
+    rule = json.load(open(SHIPPED_WEIGHTS))["calibration"]["peak_rule"]["rule"]
+    return rule["low"], rule["seed"], rule["fraction"]
 
 
 def pooled(maps):
@@ -59,6 +65,7 @@ def best_rules(truth, a):
 def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
+    shipped_peak = shipped_peak_rule()
     print("| variant | pooling | best IoU / precision (rule) | best IoU with precision >= 0.8 (rule) |")
     print("|---|---|---|---|")
     for pair in sys.argv[1:]:
@@ -67,8 +74,8 @@ def main():
         maps = np.stack([np.asarray(Image.open(os.path.join(maps_dir, "attention", v + ".png"))).astype(np.float64) / 65535
                          for v in views])
         truth = truths(dataset)
-        name = os.path.basename(os.path.dirname(os.path.abspath(dataset))) + "/" + os.path.basename(dataset.rstrip("/"))
-        shipped = score(truth, dilate(rule_peak(maps.mean(0), *SHIPPED_PEAK), DILATIONS))
+        name = variant_name(dataset)
+        shipped = score(truth, dilate(rule_peak(maps.mean(0), *shipped_peak), DILATIONS))
         print(f"| {name} | mean, the shipped rule (detect) | {shipped[0]:.3f} / {shipped[1]:.3f} | |")
         for pooling, a in pooled(maps).items():
             (i, p, r), (ip, pp, rp) = best_rules(truth, a)

@@ -55,6 +55,12 @@ def read_attention(out, dataset):
     return np.asarray(Image.open(os.path.join(out, "attention", views[0] + ".png"))).astype(np.float64) / 65535
 
 
+def variant_name(dataset):
+    """<suite>/<variant> of a dataset path, the row label of the benchmark tables."""
+    path = os.path.abspath(dataset.rstrip("/"))
+    return os.path.basename(os.path.dirname(path)) + "/" + os.path.basename(path)
+
+
 def truths(dataset):
     """The training views' ground-truth lens masks (V x H x W); no mask file means no drop."""
     views = json.load(open(os.path.join(dataset, "dataset.json")))["splits"]["train"]

@@ -36,7 +36,7 @@ from PIL import Image
 from scipy import ndimage, stats
 
 from restoration_led_ceiling import dilate, score
-from restoration_led_ensemble import read_attention, truths
+from restoration_led_ensemble import read_attention, truths, variant_name
 
 MIN_DROP_AREA = 20        # px, as restoration_led_faint.py
 DILATIONS = 3             # the released code's, as detect
@@ -146,8 +146,7 @@ def main():
                 rank = (background < R[drop].mean()).mean()
                 (missed if attention[drop].max() < 0.3 else found).append(rank)
             med = lambda x: f"{np.median(x):.2f} (n {len(x)})" if x else "none"
-            name = os.path.basename(os.path.dirname(os.path.abspath(dataset))) + "/" + os.path.basename(dataset.rstrip("/"))
-            print(f"| {name} | {shift:.1f} | {valid:.2f} | {auc(R, majority):.3f} / {auc(attention, majority):.3f} / "
+            print(f"| {variant_name(dataset)} | {shift:.1f} | {valid:.2f} | {auc(R, majority):.3f} / {auc(attention, majority):.3f} / "
                   f"{combined:.3f} | {best[0]:.3f} / {best[1]:.3f} | {med(missed)} | {med(found)} |", flush=True)
 
 
