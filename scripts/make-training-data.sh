@@ -15,6 +15,12 @@
 # PHOTOS below (Debian's mate-backgrounds nature photos without its RainDrops image, and four of
 # scikit-image's sample photos), made clear datasets by `weathergs photo-scene` (synthetic depth),
 # as photo_<name>_wNN. They train the LED only (scripts/train-models.sh).
+# ASSORTED_SCENES=N (default 0) adds N randomized scenes of the type `assorted` (specs drawn by
+# scripts/make-assorted-scenes.py into OUT/scenes/, seed ASSORTED_SEED, default 1), each rendered once
+# in one state (index mod 5: 0-1 clear, 2-3 wet, 4 snowy) and re-weathered ASSORTED_WEATHERS (default
+# 6) times with the matching effect table (scene index 100 + i: seeds of their own), as
+# assorted_NN_wMM, assorted_NN_wet_wMM or assorted_NN_snowy_wMM. They train the LED only
+# (docs/restoration_led_scenes.md).
 # LENS_MASK_RULE (default perceptible, the generator's default) sets the lens drops' `mask_rule`, the
 # LED's target: `coverage` makes masks/lens/ the drops' blurred lens coverage >= 0.1 instead of where
 # they change the view by more than 4 levels (docs/lens_droplets.md); measured, not adopted
@@ -32,6 +38,9 @@ SCENES=(park parking_lot harbour market)
 SCENE_INDEX=(0 1 2 3)  # the weather table's scene index of each
 if [ "${EXTRA_SCENES:-0}" = 1 ]; then SCENES+=(station village); SCENE_INDEX+=(64 65); fi
 PHOTO_WEATHERS=${PHOTO_WEATHERS:-4}
+ASSORTED_SCENES=${ASSORTED_SCENES:-0}
+ASSORTED_WEATHERS=${ASSORTED_WEATHERS:-6}
+ASSORTED_SEED=${ASSORTED_SEED:-1}
 LENS_MASK_RULE=${LENS_MASK_RULE:-perceptible}
 case $LENS_MASK_RULE in
   perceptible) MASK_RULE_KEY="" ;;
@@ -43,6 +52,14 @@ if [ -f "$OUT/manifest.json" ]; then  # a set written before the key existed is 
   if [ "${made_with:-perceptible}" != "$LENS_MASK_RULE" ]; then
     echo "make-training-data: $OUT/manifest.json: the set was made with lens_mask_rule ${made_with:-perceptible}," \
       "not $LENS_MASK_RULE; use another OUT or delete this one" >&2
+    exit 2
+  fi
+fi
+if [ "$ASSORTED_SCENES" -gt 0 ] && [ -f "$OUT/manifest.json" ]; then  # cached renders of other draws would mix in
+  drawn_with=$(grep -o '"assorted_seed": [0-9]*' "$OUT/manifest.json" | grep -o '[0-9]*$' || true)
+  if [ -n "$drawn_with" ] && [ "$drawn_with" != "$ASSORTED_SEED" ]; then
+    echo "make-training-data: $OUT/manifest.json: the assorted scenes were drawn with ASSORTED_SEED $drawn_with," \
+      "not $ASSORTED_SEED; use another OUT or delete this one" >&2
     exit 2
   fi
 fi
@@ -143,6 +160,25 @@ for pi in "${!PHOTOS[@]}"; do
   weather_all "$scene" "$((4 + pi))" "$PHOTO_WEATHERS"
 done
 
+# Assorted scenes: randomized layouts, materials and skies, one state each.
+if [ "$ASSORTED_SCENES" -gt 0 ]; then
+  /usr/bin/python3 "$HERE/scripts/make-assorted-scenes.py" "$ASSORTED_SCENES" "$OUT/scenes" "$ASSORTED_SEED" > /dev/null
+  for i in $(seq 0 $((ASSORTED_SCENES - 1))); do
+    scene=$(printf "assorted_%02d" "$i")
+    case $((i % 5)) in
+      0 | 1) variant=clear name=$scene table=EFFECTS ;;
+      2 | 3) variant=wet name=${scene}_wet table=EFFECTS_wet ;;
+      *) variant=snowy name=${scene}_snowy table=EFFECTS_snowy ;;
+    esac
+    if [ ! -f "$OUT/clear/$name/dataset.json" ]; then
+      echo "== render $scene ($variant, $PROFILE)"
+      "$BIN" --quiet generate --scene "$OUT/scenes/$scene.json" --weather "$variant" --profile "$PROFILE" \
+        --no-colmap --out "$OUT/clear/$name"
+    fi
+    weather_all "$name" "$((100 + i))" "$ASSORTED_WEATHERS" "$table"
+  done
+fi
+
 seconds=$(( $(date +%s) - start ))
 datasets=$(find "$OUT" -mindepth 2 -maxdepth 2 -name dataset.json -not -path "$OUT/clear/*" | wc -l)
 views=$(find "$OUT" -path "$OUT/clear" -prune -o -path "*/images/*.png" -print | wc -l)
@@ -150,7 +186,7 @@ size=$(du -sm "$OUT" | cut -f1)
 cat > "$OUT/manifest.json" <<EOF
 {"format": "weathergs-training-set", "scenes": [$(printf '"%s", ' "${SCENES[@]}" | sed 's/, $//')], "profile": "$PROFILE", "lens_mask_rule": "$LENS_MASK_RULE",
  "weathers_per_scene": $WEATHERS, "overcast_variants": [$(printf '"%s", ' "${VARIANTS[@]}" | sed 's/, $//')], "weathers_per_variant": $VARIANT_WEATHERS,
- "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "datasets": $datasets, "views": $views, "size_mb": $size,
+ "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "assorted_scenes": $ASSORTED_SCENES, "weathers_per_assorted": $ASSORTED_WEATHERS, "assorted_seed": $ASSORTED_SEED, "datasets": $datasets, "views": $views, "size_mb": $size,
  "seconds_this_run": $seconds, "recipe": "scripts/make-training-data.sh"}
 EOF
 echo "training set: $datasets datasets, $views views, $size MB in $OUT ($seconds s this run)"

@@ -26,9 +26,9 @@ LED_SEED=${LED_SEED:-1}       # its training seed
 LED_BATCH=${LED_BATCH:-4}     # its views per iteration
 LED_POOLING=${LED_POOLING:-none}  # its --view-pooling (measured, not adopted: docs/restoration_led_record.md, "Pooling over the views")
 # Datasets and clear renders that train the LED only: the photographs, the overcast bases and the
-# scenes of EXTRA_SCENES=1 (scripts/make-training-data.sh).
+# scenes of EXTRA_SCENES=1 and ASSORTED_SCENES=N (scripts/make-training-data.sh).
 led_only() {
-  case $1 in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9] | station* | village*) return 0 ;; esac
+  case $1 in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9] | station* | village* | assorted_*) return 0 ;; esac
   return 1
 }
 train=() held=() held_last=()

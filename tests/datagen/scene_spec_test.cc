@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "core/atomic_file.h"
 #include "core/error.h"
@@ -93,6 +94,39 @@ TEST(SceneSpecTest, TrainingScenesParseWithTheirOvercastVariants) {
     for (const char* benchmark : {"tanabata", "factory", "pool"}) EXPECT_NE(s.type, benchmark) << name;
   }
   EXPECT_EQ(count, 6);  // park, parking_lot, harbour, market, station, village
+}
+
+// The randomized training scenes (scripts/make-assorted-scenes.py, ASSORTED_SCENES in
+// make-training-data.sh): every drawn spec parses with both variants and a distinct-view quick path,
+// the draw is a function of (seed, index) alone, and different indices draw different scenes.
+TEST(SceneSpecTest, AssortedScenesParseAndAreDeterministic) {
+  TempDir tmp;
+  auto draw = [&](const std::string& dir, int n, int seed) {
+    const std::string cmd = "/usr/bin/python3 " + std::string(WEATHERGS_SOURCE_DIR) + "/scripts/make-assorted-scenes.py " +
+                            std::to_string(n) + " " + (tmp / dir) + " " + std::to_string(seed) + " > /dev/null 2>&1";
+    return WEXITSTATUS(std::system(cmd.c_str()));
+  };
+  ASSERT_EQ(draw("a", 12, 1), 0);
+  ASSERT_EQ(draw("b", 3, 1), 0);  // fewer scenes: the first ones are the same
+  ASSERT_EQ(draw("c", 3, 2), 0);  // another seed: other scenes
+  std::set<uint64_t> layout_seeds;
+  for (int i = 0; i < 12; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "assorted_%02d.json", i);
+    const SceneSpec s = read_scene_spec(tmp / (std::string("a/") + name));
+    EXPECT_EQ(s.type, "assorted");
+    EXPECT_EQ(s.variant("wet").surface["kind"], "rain") << name;
+    EXPECT_EQ(s.variant("snowy").surface["kind"], "snow") << name;
+    const std::vector<Camera> cams = scene_cameras(s, s.profile("quick"));
+    EXPECT_GE(min_camera_separation_fraction(cams), kMinCameraSeparationFraction) << name;
+    layout_seeds.insert(s.seed);
+    if (i < 3) {
+      EXPECT_EQ(read_file(tmp / (std::string("a/") + name)), read_file(tmp / (std::string("b/") + name))) << name;
+      EXPECT_NE(read_file(tmp / (std::string("a/") + name)), read_file(tmp / (std::string("c/") + name))) << name;
+    }
+  }
+  EXPECT_EQ(layout_seeds.size(), 12u);
+  EXPECT_NE(draw("bad", 0, 1), 0);  // N outside 1..100 is refused
 }
 
 TEST(SceneSpecTest, EveryProfileHasDistinctViewsAndTestViewsBetweenTrainingViews) {
