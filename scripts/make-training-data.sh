@@ -123,13 +123,16 @@ weather_all() {  # clear dataset name, scene index in the table, number of weath
   done
 }
 
+render() {  # scene spec, variant (clear, wet, snowy), name of the render under OUT/clear (cached)
+  local spec=$1 variant=$2 name=$3
+  [ -f "$OUT/clear/$name/dataset.json" ] && return 0
+  echo "== render $name ($variant, $PROFILE)"
+  "$BIN" --quiet generate --scene "$spec" --weather "$variant" --profile "$PROFILE" --no-colmap --out "$OUT/clear/$name"
+}
+
 for si in "${!SCENES[@]}"; do
   scene=${SCENES[$si]}
-  if [ ! -f "$OUT/clear/$scene/dataset.json" ]; then
-    echo "== render $scene (clear, $PROFILE)"
-    "$BIN" --quiet generate --scene "$HERE/scenes/training/$scene.json" --weather clear --profile "$PROFILE" \
-      --no-colmap --out "$OUT/clear/$scene"
-  fi
+  render "$HERE/scenes/training/$scene.json" clear "$scene"
   weather_all "$scene" "${SCENE_INDEX[$si]}" "$WEATHERS"
 done
 
@@ -138,11 +141,7 @@ for si in "${!SCENES[@]}"; do
   scene=${SCENES[$si]}
   for vi in "${!VARIANTS[@]}"; do
     variant=${VARIANTS[$vi]}
-    if [ ! -f "$OUT/clear/${scene}_$variant/dataset.json" ]; then
-      echo "== render $scene ($variant, $PROFILE)"
-      "$BIN" --quiet generate --scene "$HERE/scenes/training/$scene.json" --weather "$variant" --profile "$PROFILE" \
-        --no-colmap --out "$OUT/clear/${scene}_$variant"
-    fi
+    render "$HERE/scenes/training/$scene.json" "$variant" "${scene}_$variant"
     weather_all "${scene}_$variant" "$((20 + 2 * ${SCENE_INDEX[$si]} + vi))" "$VARIANT_WEATHERS" "EFFECTS_$variant"
   done
 done
@@ -170,11 +169,7 @@ if [ "$ASSORTED_SCENES" -gt 0 ]; then
       2 | 3) variant=wet name=${scene}_wet table=EFFECTS_wet ;;
       *) variant=snowy name=${scene}_snowy table=EFFECTS_snowy ;;
     esac
-    if [ ! -f "$OUT/clear/$name/dataset.json" ]; then
-      echo "== render $scene ($variant, $PROFILE)"
-      "$BIN" --quiet generate --scene "$OUT/scenes/$scene.json" --weather "$variant" --profile "$PROFILE" \
-        --no-colmap --out "$OUT/clear/$name"
-    fi
+    render "$OUT/scenes/$scene.json" "$variant" "$name"
     weather_all "$name" "$((100 + i))" "$ASSORTED_WEATHERS" "$table"
   done
 fi
