@@ -25,8 +25,14 @@ LED_HELD_SCENE=${LED_HELD_SCENE:-market}
 LED_SEED=${LED_SEED:-1}       # its training seed
 LED_BATCH=${LED_BATCH:-4}     # its views per iteration
 LED_POOLING=${LED_POOLING:-none}  # its --view-pooling (measured, not adopted: docs/restoration_led_record.md, "Pooling over the views")
-# Datasets and clear renders that train the LED only: the photographs, the overcast bases and the
-# scenes of EXTRA_SCENES=1 and ASSORTED_SCENES=N (scripts/make-training-data.sh).
+# What the assorted scenes of ASSORTED_SCENES=N (make-training-data.sh) do for the LED: calibrate (held
+# out with LED_HELD_SCENE: they calibrate the peak rule and are scored) or train (added to its
+# training data); both measured in docs/restoration_led_scenes.md.
+LED_ASSORTED=${LED_ASSORTED:-calibrate}
+case $LED_ASSORTED in calibrate | train) ;; *) echo "train-models: LED_ASSORTED must be calibrate or train, not '$LED_ASSORTED'" >&2; exit 2 ;; esac
+# Datasets and clear renders that only the LED uses: the photographs, the overcast bases and the
+# scenes of EXTRA_SCENES=1 and ASSORTED_SCENES=N (scripts/make-training-data.sh; the assorted ones
+# calibrate it by default, LED_ASSORTED below).
 led_only() {
   case $1 in photo_* | *_wet | *_snowy | *_wet_w[0-9][0-9] | *_snowy_w[0-9][0-9] | station* | village* | assorted_*) return 0 ;; esac
   return 1
@@ -40,7 +46,11 @@ for d in "$DATA"/*_w[0-9][0-9]; do
   base=${name%_w[0-9][0-9]}
   base=${base%_wet}
   base=${base%_snowy}
-  if [ "$base" = "$LED_HELD_SCENE" ]; then held+=("$d"); else train+=("$d"); fi
+  if [ "$base" = "$LED_HELD_SCENE" ] || { [ "$LED_ASSORTED" = calibrate ] && [[ $name == assorted_* ]]; }; then
+    held+=("$d")
+  else
+    train+=("$d")
+  fi
 done
 if [ ${#train[@]} -eq 0 ] || [ ${#held[@]} -eq 0 ]; then echo "train-models: no training datasets in $DATA or no scene $LED_HELD_SCENE (run make training-data)" >&2; exit 2; fi
 ONLY=${ONLY:-all}
