@@ -19,8 +19,8 @@
 # scripts/make-assorted-scenes.py into OUT/scenes/, seed ASSORTED_SEED, default 1), each rendered once
 # in one state (index mod 5: 0-1 clear, 2-3 wet, 4 snowy) and re-weathered ASSORTED_WEATHERS (default
 # 6) times with the matching effect table (scene index 100 + i: seeds of their own), as
-# assorted_NN_wMM, assorted_NN_wet_wMM or assorted_NN_snowy_wMM. They train the LED only
-# (docs/restoration_led_scenes.md).
+# assorted_NN_wMM, assorted_NN_wet_wMM or assorted_NN_snowy_wMM. Only the LED uses them: by default
+# they calibrate it (LED_ASSORTED in scripts/train-models.sh; docs/restoration_led_scenes.md).
 # LENS_MASK_RULE (default perceptible, the generator's default) sets the lens drops' `mask_rule`, the
 # LED's target: `coverage` makes masks/lens/ the drops' blurred lens coverage >= 0.1 instead of where
 # they change the view by more than 4 levels (docs/lens_droplets.md); measured, not adopted

@@ -106,6 +106,7 @@ TEST(SceneSpecTest, AssortedScenesParseAndAreDeterministic) {
                             std::to_string(n) + " " + (tmp / dir) + " " + std::to_string(seed) + " > /dev/null 2>&1";
     return WEXITSTATUS(std::system(cmd.c_str()));
   };
+  auto at = [&](const char* dir, const char* file) { return tmp / (std::string(dir) + "/" + file); };
   ASSERT_EQ(draw("a", 12, 1), 0);
   ASSERT_EQ(draw("b", 3, 1), 0);  // fewer scenes: the first ones are the same
   ASSERT_EQ(draw("c", 3, 2), 0);  // another seed: other scenes
@@ -113,7 +114,7 @@ TEST(SceneSpecTest, AssortedScenesParseAndAreDeterministic) {
   for (int i = 0; i < 12; ++i) {
     char name[32];
     std::snprintf(name, sizeof name, "assorted_%02d.json", i);
-    const SceneSpec s = read_scene_spec(tmp / (std::string("a/") + name));
+    const SceneSpec s = read_scene_spec(at("a", name));
     EXPECT_EQ(s.type, "assorted");
     EXPECT_EQ(s.variant("wet").surface["kind"], "rain") << name;
     EXPECT_EQ(s.variant("snowy").surface["kind"], "snow") << name;
@@ -121,8 +122,8 @@ TEST(SceneSpecTest, AssortedScenesParseAndAreDeterministic) {
     EXPECT_GE(min_camera_separation_fraction(cams), kMinCameraSeparationFraction) << name;
     layout_seeds.insert(s.seed);
     if (i < 3) {
-      EXPECT_EQ(read_file(tmp / (std::string("a/") + name)), read_file(tmp / (std::string("b/") + name))) << name;
-      EXPECT_NE(read_file(tmp / (std::string("a/") + name)), read_file(tmp / (std::string("c/") + name))) << name;
+      EXPECT_EQ(read_file(at("a", name)), read_file(at("b", name))) << name;
+      EXPECT_NE(read_file(at("a", name)), read_file(at("c", name))) << name;
     }
   }
   EXPECT_EQ(layout_seeds.size(), 12u);
