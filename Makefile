@@ -43,15 +43,19 @@ test-asan: deps
 	  ctest --output-on-failure --label-exclude slow -j $(JOBS)
 
 # The restoration training set (docs/restoration.md): four training scenes (scenes/training/), rendered
-# clear once and re-weathered with a fixed table of specs; a cache (existing datasets are kept).
+# clear once and re-weathered with a fixed table of specs, and the randomized scenes that calibrate
+# the LED; a cache (existing datasets are kept).
 TRAINING_DATA ?= data/training
+MAKE_TRAINING_DATA = bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) 12 quick
 training-data: build
-	bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) 12 quick
+	$(MAKE_TRAINING_DATA)
 
 # Retrains every weight file in models/ from scratch (models/README.md); MODELS_DIR=DIR writes them
-# there instead, leaving the shipped weights alone (e.g. to compare sha256s).
+# there instead, leaving the shipped weights alone (e.g. to compare sha256s). The training set's
+# assorted scenes are made beside the LED's training (scripts/train-models.sh), not before it.
 MODELS_DIR ?= models
-models: training-data
+models: build
+	TRAINING_PART=base $(MAKE_TRAINING_DATA)
 	bash scripts/train-models.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) $(MODELS_DIR)
 
 # libFuzzer harnesses (fuzz/README.md) in a clang build; FUZZ_SECONDS per harness (600 for the

@@ -15,12 +15,16 @@
 # PHOTOS below (Debian's mate-backgrounds nature photos without its RainDrops image, and four of
 # scikit-image's sample photos), made clear datasets by `weathergs photo-scene` (synthetic depth),
 # as photo_<name>_wNN. They train the LED only (scripts/train-models.sh).
-# ASSORTED_SCENES=N (default 0) adds N randomized scenes of the type `assorted` (specs drawn by
-# scripts/make-assorted-scenes.py into OUT/scenes/, seed ASSORTED_SEED, default 1), each rendered once
-# in one state (index mod 5: 0-1 clear, 2-3 wet, 4 snowy) and re-weathered ASSORTED_WEATHERS (default
-# 6) times with the matching effect table (scene index 100 + i: seeds of their own), as
+# ASSORTED_SCENES=N (default 16; 0 = none) adds N randomized scenes of the type `assorted` (specs drawn
+# by scripts/make-assorted-scenes.py into OUT/scenes/, seed ASSORTED_SEED, default 1), each rendered
+# once in one state (index mod 5: 0-1 clear, 2-3 wet, 4 snowy) and re-weathered ASSORTED_WEATHERS
+# (default 6) times with the matching effect table (scene index 100 + i: seeds of their own), as
 # assorted_NN_wMM, assorted_NN_wet_wMM or assorted_NN_snowy_wMM. Only the LED uses them: by default
-# they calibrate it (LED_ASSORTED in scripts/train-models.sh; docs/restoration_led_scenes.md).
+# they calibrate its peak rule with market (LED_ASSORTED in scripts/train-models.sh;
+# docs/restoration_led_scenes.md).
+# TRAINING_PART=all|base|assorted (default all): make everything, everything but the assorted
+# scenes, or only them. `make models` makes the base part first and the assorted scenes beside the
+# LED's training (scripts/train-models.sh), which does not need them until its calibration.
 # LENS_MASK_RULE (default perceptible, the generator's default) sets the lens drops' `mask_rule`, the
 # LED's target: `coverage` makes masks/lens/ the drops' blurred lens coverage >= 0.1 instead of where
 # they change the view by more than 4 levels (docs/lens_droplets.md); measured, not adopted
@@ -38,10 +42,12 @@ SCENES=(park parking_lot harbour market)
 SCENE_INDEX=(0 1 2 3)  # the weather table's scene index of each
 if [ "${EXTRA_SCENES:-0}" = 1 ]; then SCENES+=(station village); SCENE_INDEX+=(64 65); fi
 PHOTO_WEATHERS=${PHOTO_WEATHERS:-4}
-ASSORTED_SCENES=${ASSORTED_SCENES:-0}
+ASSORTED_SCENES=${ASSORTED_SCENES:-16}
 ASSORTED_WEATHERS=${ASSORTED_WEATHERS:-6}
 ASSORTED_SEED=${ASSORTED_SEED:-1}
 LENS_MASK_RULE=${LENS_MASK_RULE:-perceptible}
+TRAINING_PART=${TRAINING_PART:-all}
+case $TRAINING_PART in all | base | assorted) ;; *) echo "make-training-data: TRAINING_PART must be all, base or assorted, not '$TRAINING_PART'" >&2; exit 2 ;; esac
 case $LENS_MASK_RULE in
   perceptible) MASK_RULE_KEY="" ;;
   coverage) MASK_RULE_KEY=", \"mask_rule\": \"coverage\"" ;;
@@ -130,37 +136,39 @@ render() {  # scene spec, variant (clear, wet, snowy), name of the render under 
   "$BIN" --quiet generate --scene "$spec" --weather "$variant" --profile "$PROFILE" --no-colmap --out "$OUT/clear/$name"
 }
 
-for si in "${!SCENES[@]}"; do
-  scene=${SCENES[$si]}
-  render "$HERE/scenes/training/$scene.json" clear "$scene"
-  weather_all "$scene" "${SCENE_INDEX[$si]}" "$WEATHERS"
-done
-
-# The overcast bases (scene index 20 + 2 * scene + variant in the weather table: seeds of their own).
-for si in "${!SCENES[@]}"; do
-  scene=${SCENES[$si]}
-  for vi in "${!VARIANTS[@]}"; do
-    variant=${VARIANTS[$vi]}
-    render "$HERE/scenes/training/$scene.json" "$variant" "${scene}_$variant"
-    weather_all "${scene}_$variant" "$((20 + 2 * ${SCENE_INDEX[$si]} + vi))" "$VARIANT_WEATHERS" "EFFECTS_$variant"
+make_base() {  # the training scenes, their overcast bases and the photographs
+  for si in "${!SCENES[@]}"; do
+    scene=${SCENES[$si]}
+    render "$HERE/scenes/training/$scene.json" clear "$scene"
+    weather_all "$scene" "${SCENE_INDEX[$si]}" "$WEATHERS"
   done
-done
 
-# Photographs: a 16-view pan at the profile's size, then PHOTO_WEATHERS weathers (scene index 4 + i
-# in the weather table, so their mixes differ from the scenes').
-size=$( [ "$PROFILE" = quick ] && echo "--width 300 --height 200" || echo "--width 600 --height 400" )
-for pi in "${!PHOTOS[@]}"; do
-  photo=${PHOTOS[$pi]}
-  stem=$(basename "${photo%.*}" | tr 'A-Z' 'a-z')
-  scene="photo_$stem"
-  if [ ! -f "$OUT/clear/$scene/dataset.json" ]; then
-    "$BIN" --quiet photo-scene --photo "$photo" $size --out "$OUT/clear/$scene" > /dev/null
-  fi
-  weather_all "$scene" "$((4 + pi))" "$PHOTO_WEATHERS"
-done
+  # The overcast bases (scene index 20 + 2 * scene + variant in the weather table: seeds of their own).
+  for si in "${!SCENES[@]}"; do
+    scene=${SCENES[$si]}
+    for vi in "${!VARIANTS[@]}"; do
+      variant=${VARIANTS[$vi]}
+      render "$HERE/scenes/training/$scene.json" "$variant" "${scene}_$variant"
+      weather_all "${scene}_$variant" "$((20 + 2 * ${SCENE_INDEX[$si]} + vi))" "$VARIANT_WEATHERS" "EFFECTS_$variant"
+    done
+  done
+
+  # Photographs: a 16-view pan at the profile's size, then PHOTO_WEATHERS weathers (scene index 4 + i
+  # in the weather table, so their mixes differ from the scenes').
+  size=$( [ "$PROFILE" = quick ] && echo "--width 300 --height 200" || echo "--width 600 --height 400" )
+  for pi in "${!PHOTOS[@]}"; do
+    photo=${PHOTOS[$pi]}
+    stem=$(basename "${photo%.*}" | tr 'A-Z' 'a-z')
+    scene="photo_$stem"
+    if [ ! -f "$OUT/clear/$scene/dataset.json" ]; then
+      "$BIN" --quiet photo-scene --photo "$photo" $size --out "$OUT/clear/$scene" > /dev/null
+    fi
+    weather_all "$scene" "$((4 + pi))" "$PHOTO_WEATHERS"
+  done
+}
 
 # Assorted scenes: randomized layouts, materials and skies, one state each.
-if [ "$ASSORTED_SCENES" -gt 0 ]; then
+make_assorted() {
   /usr/bin/python3 "$HERE/scripts/make-assorted-scenes.py" "$ASSORTED_SCENES" "$OUT/scenes" "$ASSORTED_SEED" > /dev/null
   for i in $(seq 0 $((ASSORTED_SCENES - 1))); do
     scene=$(printf "assorted_%02d" "$i")
@@ -172,16 +180,20 @@ if [ "$ASSORTED_SCENES" -gt 0 ]; then
     render "$OUT/scenes/$scene.json" "$variant" "$name"
     weather_all "$name" "$((100 + i))" "$ASSORTED_WEATHERS" "$table"
   done
-fi
+}
+
+if [ "$TRAINING_PART" != assorted ]; then make_base; fi
+if [ "$TRAINING_PART" != base ] && [ "$ASSORTED_SCENES" -gt 0 ]; then make_assorted; fi
 
 seconds=$(( $(date +%s) - start ))
 datasets=$(find "$OUT" -mindepth 2 -maxdepth 2 -name dataset.json -not -path "$OUT/clear/*" | wc -l)
 views=$(find "$OUT" -path "$OUT/clear" -prune -o -path "*/images/*.png" -print | wc -l)
 size=$(du -sm "$OUT" | cut -f1)
+assorted_made=$(find "$OUT/clear" -mindepth 2 -maxdepth 2 -name dataset.json -path "$OUT/clear/assorted_*" | wc -l)
 cat > "$OUT/manifest.json" <<EOF
 {"format": "weathergs-training-set", "scenes": [$(printf '"%s", ' "${SCENES[@]}" | sed 's/, $//')], "profile": "$PROFILE", "lens_mask_rule": "$LENS_MASK_RULE",
  "weathers_per_scene": $WEATHERS, "overcast_variants": [$(printf '"%s", ' "${VARIANTS[@]}" | sed 's/, $//')], "weathers_per_variant": $VARIANT_WEATHERS,
- "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "assorted_scenes": $ASSORTED_SCENES, "weathers_per_assorted": $ASSORTED_WEATHERS, "assorted_seed": $ASSORTED_SEED, "datasets": $datasets, "views": $views, "size_mb": $size,
+ "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "assorted_scenes": $assorted_made, "weathers_per_assorted": $ASSORTED_WEATHERS, "assorted_seed": $ASSORTED_SEED, "datasets": $datasets, "views": $views, "size_mb": $size,
  "seconds_this_run": $seconds, "recipe": "scripts/make-training-data.sh"}
 EOF
 echo "training set: $datasets datasets, $views views, $size MB in $OUT ($seconds s this run)"

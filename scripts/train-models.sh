@@ -6,6 +6,12 @@
 #   (the benchmark's scenes are unseen too); its overcast bases (<scene>_wet_wNN,
 #   <scene>_snowy_wNN) are held out with it. The photograph datasets (photo_*_wNN, crop variety:
 #   their particles fall on a synthetic depth) and the overcast bases train the LED and nothing else.
+#   The randomized assorted scenes (ASSORTED_SCENES in make-training-data.sh) are held out as well:
+#   after training, the peak rule is calibrated again on market and them together (`weathergs
+#   calibrate-led`; docs/restoration_led_scenes.md). The LED does not need them before that, so when
+#   they are missing from TRAINING_DATA they are made beside its training, once the AEF plugins are
+#   done (`TRAINING_PART=assorted scripts/make-training-data.sh`; ASSORTED_SCENES=0 calibrates on
+#   market alone).
 # - AEF and selector: the last weather of each training scene (*_w11 with the default 12) and the whole
 #   market scene, so that the selector's theta and the held-out PSNRs come from a scene the networks
 #   never saw.
@@ -30,6 +36,19 @@ LED_POOLING=${LED_POOLING:-none}  # its --view-pooling (measured, not adopted: d
 # training data); both measured in docs/restoration_led_scenes.md.
 LED_ASSORTED=${LED_ASSORTED:-calibrate}
 case $LED_ASSORTED in calibrate | train) ;; *) echo "train-models: LED_ASSORTED must be calibrate or train, not '$LED_ASSORTED'" >&2; exit 2 ;; esac
+ONLY=${ONLY:-all}
+HERE=$(cd "$(dirname "$0")/.." && pwd)
+# Makes the assorted scenes TRAINING_DATA lacks (a no-op when they are there), with the profile and
+# weather count the set was made with.
+make_assorted() {
+  local manifest="$DATA/manifest.json" profile weathers
+  if [ ! -f "$manifest" ]; then echo "train-models: $manifest missing: $DATA was not made by scripts/make-training-data.sh" >&2; return 2; fi
+  profile=$(grep -o '"profile": "[a-z]*"' "$manifest" | cut -d'"' -f4)
+  weathers=$(grep -o '"weathers_per_scene": [0-9]*' "$manifest" | grep -o '[0-9]*$')
+  TRAINING_PART=assorted bash "$HERE/scripts/make-training-data.sh" "$BIN" "$DATA" "$weathers" "$profile"
+}
+led_runs() { [ "$ONLY" = all ] || [ "$ONLY" = led ]; }
+if [ "$LED_ASSORTED" = train ] && led_runs; then make_assorted; fi  # they train: needed first
 # Datasets and clear renders that only the LED uses: the photographs, the overcast bases and the
 # scenes of EXTRA_SCENES=1 and ASSORTED_SCENES=N (scripts/make-training-data.sh; the assorted ones
 # calibrate it by default, LED_ASSORTED below).
@@ -46,14 +65,15 @@ for d in "$DATA"/*_w[0-9][0-9]; do
   base=${name%_w[0-9][0-9]}
   base=${base%_wet}
   base=${base%_snowy}
-  if [ "$base" = "$LED_HELD_SCENE" ] || { [ "$LED_ASSORTED" = calibrate ] && [[ $name == assorted_* ]]; }; then
+  if [ "$LED_ASSORTED" = calibrate ] && [[ $name == assorted_* ]]; then
+    continue  # listed again for the calibration after training (they may not exist yet)
+  elif [ "$base" = "$LED_HELD_SCENE" ]; then
     held+=("$d")
   else
     train+=("$d")
   fi
 done
 if [ ${#train[@]} -eq 0 ] || [ ${#held[@]} -eq 0 ]; then echo "train-models: no training datasets in $DATA or no scene $LED_HELD_SCENE (run make training-data)" >&2; exit 2; fi
-ONLY=${ONLY:-all}
 
 # The AEF's training and held-out sets (the clear renders, clear/<scene>, are clear views for the
 # plugins and the selector).
@@ -70,7 +90,8 @@ done
 
 # Every network trains with one thread (the same seed then gives the same weights), so the work runs
 # as two single-threaded jobs side by side, one per core: the LED then the selector, and the two AEF
-# plugins (their times: docs/restoration.md). Each job logs to OUT/logs/<job>.log.
+# plugins then the assorted scenes (their times: docs/restoration.md). Each job logs to
+# OUT/logs/<job>.log; the LED's final calibration to OUT/logs/led_calibration.log.
 mkdir -p "$OUT/led" "$OUT/aef" "$OUT/logs"
 led_job() {
   if [ "$ONLY" = all ] || [ "$ONLY" = led ]; then
@@ -92,6 +113,10 @@ aef_job() {
         --iterations "$AEF_ITERATIONS" --seed 1 --threads 1
     done
   fi
+  if [ "$LED_ASSORTED" = calibrate ] && led_runs; then
+    echo "train-models: the assorted scenes that calibrate the LED (made unless cached)"
+    make_assorted
+  fi
 }
 start=$(date +%s)
 led_job > "$OUT/logs/led_selector.log" 2>&1 &
@@ -112,4 +137,15 @@ for job in "led_selector:$led_pid" "aef_plugins:$aef_pid"; do
     status=$code
   fi
 done
+# The LED's final calibration: market and the assorted scenes, which it never saw.
+if [ $status -eq 0 ] && [ "$LED_ASSORTED" = calibrate ] && led_runs; then
+  assorted=()
+  for d in "$DATA"/assorted_*_w[0-9][0-9]; do [ -f "$d/dataset.json" ] && assorted+=("$d"); done
+  if [ ${#assorted[@]} -gt 0 ]; then
+    echo "train-models: LED peak rule calibrated again on ${#held[@]} + ${#assorted[@]} held-out datasets ($LED_HELD_SCENE and the assorted scenes)"
+    "$BIN" --quiet calibrate-led --weights "$OUT/led/led" --held-out "${held[@]}" "${assorted[@]}" --peak --out "$OUT/led/led" \
+      > "$OUT/logs/led_calibration.log" 2>&1 || { status=$?; echo "train-models: LED calibration FAILED (exit $status); see $OUT/logs/led_calibration.log" >&2; }
+  fi
+  echo "train-models: done after $(( $(date +%s) - start )) s"
+fi
 exit $status
