@@ -64,13 +64,11 @@ for d in "${bench_train[@]}" "${bench_held[@]}"; do
   [ -f "$d/dataset.json" ] || { echo "restoration_led_benchstyle: $d missing (run the data step)" >&2; exit 2; }
 done
 train=() held=()
-if [ "$STEP" = mixed ]; then  # the shipped LED's split of TRAINING_DATA (scripts/train-models.sh: market and its overcast bases held out)
-  for d in "$DATA"/*_w[0-9][0-9]; do
-    [ -f "$d/dataset.json" ] || continue
-    base=$(basename "$d"); base=${base%_w[0-9][0-9]}; base=${base%_wet}; base=${base%_snowy}
-    if [ "$base" = market ]; then held+=("$d"); else train+=("$d"); fi
-  done
-  [ ${#train[@]} -gt 0 ] || { echo "restoration_led_benchstyle: no training datasets in $DATA (run make training-data)" >&2; exit 2; }
+if [ "$STEP" = mixed ]; then  # the shipped LED's split of TRAINING_DATA, as scripts/train-models.sh makes it
+  split=$(LED_SPLIT_ONLY=1 bash scripts/train-models.sh "$BIN" "$DATA" /dev/null)
+  while read -r kind d; do
+    if [ "$kind" = held ]; then held+=("$d"); else train+=("$d"); fi
+  done <<< "$split"
 fi
 train+=("${bench_train[@]}")
 held+=("${bench_held[@]}")

@@ -25,6 +25,8 @@
 # TRAINING_PART=all|base|assorted (default all): make everything, everything but the assorted
 # scenes, or only them. `make models` makes the base part first and the assorted scenes beside the
 # LED's training (scripts/train-models.sh), which does not need them until its calibration.
+# RENDER_JOBS (default 2): Blender renders at once (scripts/train-models.sh makes the assorted scenes
+# with 1, beside the LED's training).
 # LENS_MASK_RULE (default perceptible, the generator's default) sets the lens drops' `mask_rule`, the
 # LED's target: `coverage` makes masks/lens/ the drops' blurred lens coverage >= 0.1 instead of where
 # they change the view by more than 4 levels (docs/lens_droplets.md); measured, not adopted
@@ -136,7 +138,34 @@ render() {  # scene spec, variant (clear, wet, snowy), name of the render under 
   "$BIN" --quiet generate --scene "$spec" --weather "$variant" --profile "$PROFILE" --no-colmap --out "$OUT/clear/$name"
 }
 
+# Renders "spec|variant|name" items, RENDER_JOBS at a time (default 2: a quick-profile render is
+# mostly Blender's single-threaded scene building, so two side by side take about half the wall
+# time). Each render is written atomically by `generate`; fails if any of them failed.
+RENDER_JOBS=${RENDER_JOBS:-2}
+render_all() {
+  local pids=() item spec variant name failed=0
+  for item in "$@"; do
+    IFS='|' read -r spec variant name <<< "$item"
+    render "$spec" "$variant" "$name" &
+    pids+=($!)
+    if [ ${#pids[@]} -ge "$RENDER_JOBS" ]; then
+      wait "${pids[0]}" || failed=1
+      pids=("${pids[@]:1}")
+    fi
+  done
+  for item in "${pids[@]}"; do wait "$item" || failed=1; done
+  if [ $failed -ne 0 ]; then echo "make-training-data: a render failed (see above)" >&2; return 2; fi
+}
+
 make_base() {  # the training scenes, their overcast bases and the photographs
+  local renders=() si vi
+  for si in "${!SCENES[@]}"; do
+    renders+=("$HERE/scenes/training/${SCENES[$si]}.json|clear|${SCENES[$si]}")
+    for vi in "${!VARIANTS[@]}"; do
+      renders+=("$HERE/scenes/training/${SCENES[$si]}.json|${VARIANTS[$vi]}|${SCENES[$si]}_${VARIANTS[$vi]}")
+    done
+  done
+  render_all "${renders[@]}"
   for si in "${!SCENES[@]}"; do
     scene=${SCENES[$si]}
     render "$HERE/scenes/training/$scene.json" clear "$scene"
@@ -168,16 +197,25 @@ make_base() {  # the training scenes, their overcast bases and the photographs
 }
 
 # Assorted scenes: randomized layouts, materials and skies, one state each.
+assorted_state() {  # index -> "variant name effect-table" of assorted scene i
+  local scene
+  scene=$(printf "assorted_%02d" "$1")
+  case $(($1 % 5)) in
+    0 | 1) echo "clear $scene EFFECTS" ;;
+    2 | 3) echo "wet ${scene}_wet EFFECTS_wet" ;;
+    *) echo "snowy ${scene}_snowy EFFECTS_snowy" ;;
+  esac
+}
 make_assorted() {
+  local renders=() i variant name table
   /usr/bin/python3 "$HERE/scripts/make-assorted-scenes.py" "$ASSORTED_SCENES" "$OUT/scenes" "$ASSORTED_SEED" > /dev/null
   for i in $(seq 0 $((ASSORTED_SCENES - 1))); do
-    scene=$(printf "assorted_%02d" "$i")
-    case $((i % 5)) in
-      0 | 1) variant=clear name=$scene table=EFFECTS ;;
-      2 | 3) variant=wet name=${scene}_wet table=EFFECTS_wet ;;
-      *) variant=snowy name=${scene}_snowy table=EFFECTS_snowy ;;
-    esac
-    render "$OUT/scenes/$scene.json" "$variant" "$name"
+    read -r variant name table <<< "$(assorted_state "$i")"
+    renders+=("$OUT/scenes/$(printf "assorted_%02d" "$i").json|$variant|$name")
+  done
+  render_all "${renders[@]}"
+  for i in $(seq 0 $((ASSORTED_SCENES - 1))); do
+    read -r variant name table <<< "$(assorted_state "$i")"
     weather_all "$name" "$((100 + i))" "$ASSORTED_WEATHERS" "$table"
   done
 }

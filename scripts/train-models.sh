@@ -18,7 +18,8 @@
 #
 #   scripts/train-models.sh BUILD/apps/weathergs TRAINING_DATA OUT_MODELS_DIR [ITERATIONS]
 #   ONLY=led|aef|selector (environment): retrain only those weights (default: all; aef = the two
-#   plugins and the selector).
+#   plugins and the selector). LED_SPLIT_ONLY=1 prints the LED's training and held-out datasets
+#   (`train PATH`, `held PATH`) and stops.
 set -euo pipefail
 BIN=${1:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
 DATA=${2:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
@@ -74,6 +75,11 @@ for d in "$DATA"/*_w[0-9][0-9]; do
   fi
 done
 if [ ${#train[@]} -eq 0 ] || [ ${#held[@]} -eq 0 ]; then echo "train-models: no training datasets in $DATA or no scene $LED_HELD_SCENE (run make training-data)" >&2; exit 2; fi
+if [ "${LED_SPLIT_ONLY:-0}" = 1 ]; then  # print the LED's split ("train PATH" / "held PATH" lines) and stop (benchmarks/ reuse it)
+  printf 'train %s\n' "${train[@]}"
+  printf 'held %s\n' "${held[@]}"
+  exit 0
+fi
 
 # The AEF's training and held-out sets (the clear renders, clear/<scene>, are clear views for the
 # plugins and the selector).
@@ -89,8 +95,8 @@ for d in "$DATA"/*_w[0-9][0-9] "$DATA"/clear/*; do
 done
 
 # Every network trains with one thread (the same seed then gives the same weights), so the work runs
-# as two single-threaded jobs side by side, one per core: the LED then the selector, and the two AEF
-# plugins then the assorted scenes (their times: docs/restoration.md). Each job logs to
+# as two single-threaded jobs side by side, one per core: the LED, and the two AEF plugins, the
+# assorted scenes and the selector (their times: docs/restoration.md). Each job logs to
 # OUT/logs/<job>.log; the LED's final calibration to OUT/logs/led_calibration.log.
 mkdir -p "$OUT/led" "$OUT/aef" "$OUT/logs"
 led_job() {
@@ -99,13 +105,8 @@ led_job() {
     "$BIN" --threads 1 train-led --data "${train[@]}" --held-out "${held[@]}" --out "$OUT/led/led" \
       --iterations "$ITERATIONS" --batch "$LED_BATCH" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --balance-drops "$LED_BALANCE" --calibrate-peak --seed "$LED_SEED" --view-pooling "$LED_POOLING" --threads 1
   fi
-  if [ "$ONLY" = all ] || [ "$ONLY" = aef ] || [ "$ONLY" = selector ]; then
-    echo "train-models: weather selector on ${#aef_train[@]} datasets, theta calibrated on ${#aef_held[@]} held out"
-    "$BIN" --threads 1 train-aef --model selector --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/selector" \
-      --iterations "$SELECTOR_ITERATIONS" --seed 1 --threads 1
-  fi
 }
-aef_job() {
+aef_job() {  # the longer LED has the other core: this job takes the rest
   if [ "$ONLY" = all ] || [ "$ONLY" = aef ]; then
     echo "train-models: AEF plugins on ${#aef_train[@]} datasets, ${#aef_held[@]} held out (scene $AEF_HELD_SCENE and *_w11)"
     for model in derain desnow; do
@@ -115,19 +116,24 @@ aef_job() {
   fi
   if [ "$LED_ASSORTED" = calibrate ] && led_runs; then
     echo "train-models: the assorted scenes that calibrate the LED (made unless cached)"
-    make_assorted
+    RENDER_JOBS=1 make_assorted  # one render at a time: the LED trains on the other core
+  fi
+  if [ "$ONLY" = all ] || [ "$ONLY" = aef ] || [ "$ONLY" = selector ]; then
+    echo "train-models: weather selector on ${#aef_train[@]} datasets, theta calibrated on ${#aef_held[@]} held out"
+    "$BIN" --threads 1 train-aef --model selector --data "${aef_train[@]}" --held-out "${aef_held[@]}" --out "$OUT/aef/selector" \
+      --iterations "$SELECTOR_ITERATIONS" --seed 1 --threads 1
   fi
 }
 start=$(date +%s)
-led_job > "$OUT/logs/led_selector.log" 2>&1 &
+led_job > "$OUT/logs/led.log" 2>&1 &
 led_pid=$!
-aef_job > "$OUT/logs/aef_plugins.log" 2>&1 &
+aef_job > "$OUT/logs/aef.log" 2>&1 &
 aef_pid=$!
-echo "train-models: two jobs running (logs: $OUT/logs/led_selector.log, $OUT/logs/aef_plugins.log)"
+echo "train-models: two jobs running (logs: $OUT/logs/led.log, $OUT/logs/aef.log)"
 # If this script is stopped, stop the jobs too (a partial model is never left: each command writes atomically).
 trap 'kill $led_pid $aef_pid 2>/dev/null' INT TERM
 status=0
-for job in "led_selector:$led_pid" "aef_plugins:$aef_pid"; do
+for job in "led:$led_pid" "aef:$aef_pid"; do
   if wait "${job#*:}"; then
     echo "train-models: ${job%%:*} done after $(( $(date +%s) - start )) s"
   else
