@@ -167,18 +167,14 @@ make_base() {  # the training scenes, their overcast bases and the photographs
   done
   render_all "${renders[@]}"
   for si in "${!SCENES[@]}"; do
-    scene=${SCENES[$si]}
-    render "$HERE/scenes/training/$scene.json" clear "$scene"
-    weather_all "$scene" "${SCENE_INDEX[$si]}" "$WEATHERS"
+    weather_all "${SCENES[$si]}" "${SCENE_INDEX[$si]}" "$WEATHERS"
   done
 
   # The overcast bases (scene index 20 + 2 * scene + variant in the weather table: seeds of their own).
   for si in "${!SCENES[@]}"; do
-    scene=${SCENES[$si]}
     for vi in "${!VARIANTS[@]}"; do
       variant=${VARIANTS[$vi]}
-      render "$HERE/scenes/training/$scene.json" "$variant" "${scene}_$variant"
-      weather_all "${scene}_$variant" "$((20 + 2 * ${SCENE_INDEX[$si]} + vi))" "$VARIANT_WEATHERS" "EFFECTS_$variant"
+      weather_all "${SCENES[$si]}_$variant" "$((20 + 2 * ${SCENE_INDEX[$si]} + vi))" "$VARIANT_WEATHERS" "EFFECTS_$variant"
     done
   done
 
@@ -197,26 +193,21 @@ make_base() {  # the training scenes, their overcast bases and the photographs
 }
 
 # Assorted scenes: randomized layouts, materials and skies, one state each.
-assorted_state() {  # index -> "variant name effect-table" of assorted scene i
-  local scene
-  scene=$(printf "assorted_%02d" "$1")
-  case $(($1 % 5)) in
-    0 | 1) echo "clear $scene EFFECTS" ;;
-    2 | 3) echo "wet ${scene}_wet EFFECTS_wet" ;;
-    *) echo "snowy ${scene}_snowy EFFECTS_snowy" ;;
-  esac
-}
 make_assorted() {
-  local renders=() i variant name table
+  local renders=() names=() tables=() i scene variant name table
   /usr/bin/python3 "$HERE/scripts/make-assorted-scenes.py" "$ASSORTED_SCENES" "$OUT/scenes" "$ASSORTED_SEED" > /dev/null
   for i in $(seq 0 $((ASSORTED_SCENES - 1))); do
-    read -r variant name table <<< "$(assorted_state "$i")"
-    renders+=("$OUT/scenes/$(printf "assorted_%02d" "$i").json|$variant|$name")
+    scene=$(printf "assorted_%02d" "$i")
+    case $((i % 5)) in
+      0 | 1) variant=clear name=$scene table=EFFECTS ;;
+      2 | 3) variant=wet name=${scene}_wet table=EFFECTS_wet ;;
+      *) variant=snowy name=${scene}_snowy table=EFFECTS_snowy ;;
+    esac
+    renders+=("$OUT/scenes/$scene.json|$variant|$name") names+=("$name") tables+=("$table")
   done
   render_all "${renders[@]}"
-  for i in $(seq 0 $((ASSORTED_SCENES - 1))); do
-    read -r variant name table <<< "$(assorted_state "$i")"
-    weather_all "$name" "$((100 + i))" "$ASSORTED_WEATHERS" "$table"
+  for i in "${!names[@]}"; do
+    weather_all "${names[$i]}" "$((100 + i))" "$ASSORTED_WEATHERS" "${tables[$i]}"
   done
 }
 

@@ -100,7 +100,7 @@ done
 # OUT/logs/<job>.log; the LED's final calibration to OUT/logs/led_calibration.log.
 mkdir -p "$OUT/led" "$OUT/aef" "$OUT/logs"
 led_job() {
-  if [ "$ONLY" = all ] || [ "$ONLY" = led ]; then
+  if led_runs; then
     echo "train-models: LED on ${#train[@]} datasets, calibrated on ${#held[@]} held out"
     "$BIN" --threads 1 train-led --data "${train[@]}" --held-out "${held[@]}" --out "$OUT/led/led" \
       --iterations "$ITERATIONS" --batch "$LED_BATCH" --width "$LED_WIDTH" --colour-jitter "$LED_JITTER" --balance-drops "$LED_BALANCE" --calibrate-peak --seed "$LED_SEED" --view-pooling "$LED_POOLING" --threads 1
