@@ -5,6 +5,7 @@
 #include "apps/command.h"
 #include "core/error.h"
 #include "apps/resources.h"
+#include "core/parallel.h"
 #include "datagen/generate.h"
 
 namespace weathergs::cli {
@@ -38,7 +39,11 @@ int run(const GenerateArgs& a) {
   o.blender.executable = a.blender;
   o.blender.max_views = a.max_views;
   o.blender.script = find_blender_script(a.blender_script);
+  // The global -j/--threads caps Blender (and EEVEE's llvmpipe) and COLMAP too, not only our own
+  // loops: the number in effect (all cores the process may use when -j is 0).
+  o.blender.threads = num_threads();
   o.colmap_options.executable = a.colmap;
+  o.colmap_options.num_threads = num_threads();
   if (!a.suite.empty()) {
     if (!a.scene.empty() || !a.weather.empty()) throw InputError("--suite", "use either --suite or --scene/--weather");
     auto all = datagen::generate_suite(a.suite, a.out, o);

@@ -48,6 +48,7 @@ void BlenderOptions::validate() const {
   if (script.empty()) throw InputError(where, "script is empty: the path of blender_scripts/render_scene.py is required");
   if (!(timeout_s >= 0)) throw InputError(where, "timeout_s is " + std::to_string(timeout_s) + ", must be >= 0");
   if (max_views < 0) throw InputError(where, "max_views is " + std::to_string(max_views) + ", must be >= 0");
+  if (threads < 0) throw InputError(where, "threads is " + std::to_string(threads) + ", must be >= 0 (0 = all cores)");
 }
 
 Json blender_job(const SceneSpec& scene, const VariantSpec& variant, const ProfileSpec& profile,
@@ -79,7 +80,8 @@ Json blender_job(const SceneSpec& scene, const VariantSpec& variant, const Profi
 }
 
 ProcessResult run_blender_job(const std::string& executable, const std::string& script, const std::string& job_path,
-                              const std::string& what, const ProcessOptions& options) {
+                              const std::string& what, const ProcessOptions& options, int threads) {
+  WGS_CHECK_GE(threads, 0);
   // Blender keeps a session folder (blender_XXXXXX) in $TMPDIR and leaves it behind when the script
   // raises (--python-exit-code) or the run is killed: every failed render left one in /tmp. It gets a
   // TMPDIR of its own next to the job file instead (a unique name: two runs may share the folder),
@@ -97,8 +99,14 @@ ProcessResult run_blender_job(const std::string& executable, const std::string& 
   } remove_tmp{tmp};
   ProcessOptions with_tmp = options;
   with_tmp.env.push_back("TMPDIR=" + tmp.string());
-  return run_process({executable, "-b", "--factory-startup", "--python-exit-code", "1", "--python", script, "--", job_path},
-                     what, with_tmp);
+  std::vector<std::string> argv{executable, "-b", "--factory-startup"};
+  if (threads > 0) {
+    // -t must come before --python: Blender applies its arguments in order, and the script renders.
+    argv.insert(argv.end(), {"-t", std::to_string(threads)});
+    with_tmp.env.push_back("LP_NUM_THREADS=" + std::to_string(threads));  // EEVEE renders through llvmpipe
+  }
+  argv.insert(argv.end(), {"--python-exit-code", "1", "--python", script, "--", job_path});
+  return run_process(argv, what, with_tmp);
 }
 
 RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& variant_name, const std::string& profile_name,
@@ -126,7 +134,8 @@ RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& va
   popts.log_path = log_path;
   popts.timeout_s = options.timeout_s;
   const ProcessResult run =
-      run_blender_job(options.executable, options.script, job_path, "blender (" + options.executable + ")", popts);
+      run_blender_job(options.executable, options.script, job_path, "blender (" + options.executable + ")", popts,
+                      options.threads);
   const fs::path error_file = raw / "error.json";
   if (fs::exists(error_file)) {
     // The script reports spec errors with their location in the scene file.

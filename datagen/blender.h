@@ -19,8 +19,13 @@ struct BlenderOptions {
   double timeout_s = 0;  // 0 = no limit
   // Only the first `max_views` views of the profile (0 = all): tests and previews.
   int max_views = 0;
+  // Threads Blender may use (0 = all cores, Blender's default): its `-t` and, for EEVEE's software
+  // OpenGL, llvmpipe's LP_NUM_THREADS. `weathergs -j N generate` sets it to N, so two renders side
+  // by side (scripts/make-training-data.sh, RENDER_JOBS) can share the cores instead of fighting
+  // over them. Renders differ only by llvmpipe's thread-timing noise (render_repeatability_test).
+  int threads = 0;
 
-  void validate() const;  // InputError naming the field (executable and script set, timeout and max_views >= 0)
+  void validate() const;  // InputError naming the field (executable and script set, timeout, max_views and threads >= 0)
 };
 
 // A small emissive magenta sphere (sRGB 255, 0, 255 under the "Standard" view transform): projected
@@ -33,8 +38,9 @@ struct Marker {
 // Runs `script` (render_scene.py) on the job file in background Blender with factory settings; an
 // exception in the script exits with code 1. The one command line every caller uses. Blender's
 // temporary files go to `<folder of job_path>/blender_tmp_XXXXXX`, removed when the run ends.
+// threads > 0 caps Blender and llvmpipe at that many threads (BlenderOptions::threads).
 ProcessResult run_blender_job(const std::string& executable, const std::string& script, const std::string& job_path,
-                              const std::string& what, const ProcessOptions& options);
+                              const std::string& what, const ProcessOptions& options, int threads = 0);
 
 // The job file for the script, without output_dir (the cache key is a hash of it).
 Json blender_job(const SceneSpec& scene, const VariantSpec& variant, const ProfileSpec& profile,

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -227,6 +227,33 @@ TEST(SceneSpecTest, MissingBlenderLeavesNothing) {
   expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); }, "EEVEE exploded");
   EXPECT_FALSE(fs::exists(tmp / "out"));
   EXPECT_EQ(testing::count_entries(tmp.path()), 1);  // only the fake
+}
+
+TEST(SceneSpecTest, ThreadCapReachesBlenderAndLlvmpipe) {
+  TempDir tmp;
+  SceneSpec s = read_scene_spec(scene_path("pool.json"));
+  BlenderOptions options;
+  options.script = testing::blender_script();
+  // A "Blender" that prints how it was called and fails, so the error carries its log.
+  const std::string fake = tmp / "fake-blender";
+  {
+    std::ofstream f(fake);
+    f << "#!/bin/sh\necho \"args: $*\" >&2\necho \"LP_NUM_THREADS=${LP_NUM_THREADS:-unset}\" >&2\nexit 1\n";
+  }
+  fs::permissions(fake, fs::perms::owner_all);
+  options.executable = fake;
+  options.threads = 1;
+  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); },
+                     "args: -b --factory-startup -t 1 --python-exit-code 1 --python");
+  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); }, "LP_NUM_THREADS=1");
+  options.threads = 0;  // all cores: Blender's and llvmpipe's defaults
+  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); },
+                     "args: -b --factory-startup --python-exit-code 1 --python");
+  if (!std::getenv("LP_NUM_THREADS"))
+    expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); }, "LP_NUM_THREADS=unset");
+  options.threads = -1;
+  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); }, "threads is -1");
+  EXPECT_FALSE(fs::exists(tmp / "out"));
 }
 
 TEST(SceneSpecTest, LayoutAndMaterialErrorsComeBackFromBlender) {
