@@ -20,9 +20,8 @@ struct BlenderOptions {
   // Only the first `max_views` views of the profile (0 = all): tests and previews.
   int max_views = 0;
   // Threads Blender may use (0 = all cores, Blender's default): its `-t` and, for EEVEE's software
-  // OpenGL, llvmpipe's LP_NUM_THREADS. `weathergs -j N generate` sets it to N, so two renders side
-  // by side (scripts/make-training-data.sh, RENDER_JOBS) can share the cores instead of fighting
-  // over them. Renders differ only by llvmpipe's thread-timing noise (render_repeatability_test).
+  // OpenGL, llvmpipe's LP_NUM_THREADS. `weathergs -j N generate` sets it to N. Renders differ only
+  // by llvmpipe's thread-timing noise (render_repeatability_test).
   int threads = 0;
 
   void validate() const;  // InputError naming the field (executable and script set, timeout, max_views and threads >= 0)
