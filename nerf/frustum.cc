@@ -127,4 +127,13 @@ double near_from_points(const std::vector<Camera>& cameras, const std::vector<Ei
   return std::max(min_near_m, 0.5 * z[k]);
 }
 
+std::vector<Eigen::Vector3d> near_plane_points(const std::vector<ColmapPoint3D>& points) {
+  std::vector<Eigen::Vector3d> checked, all;
+  for (const ColmapPoint3D& p : points) {
+    all.push_back(p.xyz);
+    if (p.track.size() >= kNearMinTrack) checked.push_back(p.xyz);
+  }
+  return checked.size() >= 10 ? checked : all;
+}
+
 }  // namespace weathergs::nerf

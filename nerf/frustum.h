@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/colmap_model.h"
 #include "core/json_reader.h"
 
 namespace weathergs::nerf {
@@ -39,5 +40,14 @@ FrustumFrame forward_facing_frame(const std::vector<Camera>& cameras, double nea
 // are fewer than 10 points in front.
 double near_from_points(const std::vector<Camera>& cameras, const std::vector<Eigen::Vector3d>& points,
                         double min_near_m, double fallback_m);
+
+// The SfM points the near plane is taken from: those seen by at least kNearMinTrack views, or all of
+// them when fewer than 10 are. A point triangulated from two views has no third view to check it, and
+// the 1st percentile of a small model is its second-nearest point: on the 2026-11-28 quick suite two
+// whitish two-view points of pool_snow's 148 (probably falling snow matched across two views) lay
+// 0.1-0.9 m in front of a camera whose median point lies at 13 m, and put the near plane ~10x closer
+// than on pool_rain (a 10x larger lattice, ~3 dB lost; docs/nerf.md, "The near plane").
+inline constexpr size_t kNearMinTrack = 3;
+std::vector<Eigen::Vector3d> near_plane_points(const std::vector<ColmapPoint3D>& points);
 
 }  // namespace weathergs::nerf

@@ -113,11 +113,13 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   if (near <= 0) {
     const std::string pts_dir = o.inputs.points_dir.empty() ? ds.file(layout::kSparseModelDir) : o.inputs.points_dir;
     const fs::path pts_file = fs::path(pts_dir) / "points3D.txt";
-    std::vector<Eigen::Vector3d> pts;
-    if (fs::exists(pts_file))
-      for (const ColmapPoint3D& p : read_colmap_points3d(pts_file.string())) pts.push_back(p.xyz);
+    std::vector<ColmapPoint3D> sfm;
+    if (fs::exists(pts_file)) sfm = read_colmap_points3d(pts_file.string());
+    const std::vector<Eigen::Vector3d> pts = near_plane_points(sfm);
     near = near_from_points(ds.cameras, pts, kMinNearM, kDefaultNearM);
-    result.near_source = pts.size() >= 10 ? "sfm points: " + std::to_string(pts.size()) : "default (no SfM points)";
+    result.near_source = pts.size() >= 10 ? "sfm points: " + std::to_string(pts.size()) + " of " + std::to_string(sfm.size()) +
+                                                (pts.size() < sfm.size() ? " (track >= " + std::to_string(kNearMinTrack) + ")" : "")
+                                          : "default (no SfM points)";
   }
   result.near_m = near;
   const FrustumFrame frame = forward_facing_frame(ds.cameras, near);

@@ -1,5 +1,6 @@
 // The radiance field (nerf/field.h): the backward pass against central finite differences, exact
-// empty-space skipping, save/load, resampling, extreme values and non-forward-facing captures.
+// empty-space skipping, save/load, resampling, extreme values, non-forward-facing captures and the
+// near plane from SfM points.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -224,6 +225,35 @@ TEST(FrustumTest, CoversEveryViewAndRejectsNonForwardFacing) {
     EXPECT_NE(std::string(e.what()).find("c2"), std::string::npos) << e.what();
   }
   EXPECT_THROW(forward_facing_frame(cameras(), 0.0), InputError);
+}
+
+TEST(FrustumTest, NearPlaneIgnoresTwoViewPointsWhenEnoughAreChecked) {
+  // 100 points seen by three views at 10-11 m, and two seen by two views 0.3 m in front of the cameras
+  // (what falling snow matched across two views gives): the near plane is half the 1st-percentile
+  // depth of the checked points, not of the stray ones.
+  std::vector<ColmapPoint3D> sfm;
+  for (int i = 0; i < 100; ++i) {
+    ColmapPoint3D p;
+    p.xyz = Eigen::Vector3d(0.01 * i - 0.5, 0.0, 10.0 + 0.01 * i);
+    p.track = {{1, i}, {2, i}, {3, i}};
+    sfm.push_back(p);
+  }
+  for (int i = 0; i < 2; ++i) {
+    ColmapPoint3D p;
+    p.xyz = Eigen::Vector3d(0.1 * i, 0.0, 0.3);
+    p.track = {{1, 100 + i}, {2, 100 + i}};
+    sfm.push_back(p);
+  }
+  const std::vector<Camera> cams = cameras();
+  const std::vector<Eigen::Vector3d> checked = near_plane_points(sfm);
+  EXPECT_EQ(checked.size(), 100u);
+  EXPECT_NEAR(near_from_points(cams, checked, 0.05, 1.0), 0.5 * 10.01, 1e-9);
+  std::vector<Eigen::Vector3d> all;
+  for (const ColmapPoint3D& p : sfm) all.push_back(p.xyz);
+  EXPECT_NEAR(near_from_points(cams, all, 0.05, 1.0), 0.15, 1e-9);  // what it was before
+  // Fewer than 10 checked points: all of them count (a sparse model of two-view points only).
+  for (ColmapPoint3D& p : sfm) p.track.resize(2);
+  EXPECT_EQ(near_plane_points(sfm).size(), sfm.size());
 }
 
 }  // namespace
