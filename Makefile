@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline clean training-data models
+.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline clean training-data validation-data models
 
 all: build
 
@@ -49,6 +49,13 @@ TRAINING_DATA ?= data/training
 MAKE_TRAINING_DATA = bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(TRAINING_DATA) 12 quick
 training-data: build
 	$(MAKE_TRAINING_DATA)
+
+# The LED's validation scenes station and village (docs/restoration_led_scenes.md, "A third draw"):
+# no network trains or is calibrated on them; benchmarks/restoration_led_validation.py scores and
+# compares LED weights on them. An OUT of their own.
+VALIDATION_DATA ?= data/validation
+validation-data: build
+	TRAINING_PART=validation bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(VALIDATION_DATA) 12 quick
 
 # Retrains every weight file in models/ from scratch (models/README.md); MODELS_DIR=DIR writes them
 # there instead, leaving the shipped weights alone (e.g. to compare sha256s). The training set's

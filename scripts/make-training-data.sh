@@ -22,9 +22,13 @@
 # assorted_NN_wMM, assorted_NN_wet_wMM or assorted_NN_snowy_wMM. Only the LED uses them: by default
 # they calibrate its peak rule with market (LED_ASSORTED in scripts/train-models.sh;
 # docs/restoration_led_scenes.md).
-# TRAINING_PART=all|base|assorted (default all): make everything, everything but the assorted
-# scenes, or only them. `make models` makes the base part first and the assorted scenes beside the
-# LED's training (scripts/train-models.sh), which does not need them until its calibration.
+# TRAINING_PART=all|base|assorted|validation (default all): make everything, everything but the
+# assorted scenes, or only them. `make models` makes the base part first and the assorted scenes
+# beside the LED's training (scripts/train-models.sh), which does not need them until its calibration.
+# `validation` (into an OUT of its own): only the two validation scenes station and village (scene
+# indices 64, 65; rendered clear, WEATHERS weathers each), which no network trains on or is calibrated
+# on; they choose between draws of the LED recipe (docs/restoration_led_scenes.md, "A third draw").
+# Not with EXTRA_SCENES=1, which trains on the same scenes.
 # RENDER_JOBS (default 2): Blender renders at once (scripts/train-models.sh makes the assorted scenes
 # with 1, beside the LED's training).
 # LENS_MASK_RULE (default perceptible, the generator's default) sets the lens drops' `mask_rule`, the
@@ -49,7 +53,27 @@ ASSORTED_WEATHERS=${ASSORTED_WEATHERS:-6}
 ASSORTED_SEED=${ASSORTED_SEED:-1}
 LENS_MASK_RULE=${LENS_MASK_RULE:-perceptible}
 TRAINING_PART=${TRAINING_PART:-all}
-case $TRAINING_PART in all | base | assorted) ;; *) echo "make-training-data: TRAINING_PART must be all, base or assorted, not '$TRAINING_PART'" >&2; exit 2 ;; esac
+case $TRAINING_PART in
+  all | base | assorted) ;;
+  validation)
+    if [ "${EXTRA_SCENES:-0}" = 1 ]; then
+      echo "make-training-data: TRAINING_PART=validation makes station and village, which EXTRA_SCENES=1 trains on" >&2; exit 2
+    fi
+    SCENES=(station village) SCENE_INDEX=(64 65) ASSORTED_SCENES=0 ;;
+  *) echo "make-training-data: TRAINING_PART must be all, base, assorted or validation, not '$TRAINING_PART'" >&2; exit 2 ;;
+esac
+# The validation scenes never share an OUT with a training set: train-models.sh trains on every
+# <name>_wNN it finds there. A validation OUT's manifest says "part": "validation".
+if [ -f "$OUT/manifest.json" ]; then
+  holds_validation=$(grep -c '"part": "validation"' "$OUT/manifest.json" || true)
+  if [ "$TRAINING_PART" = validation ] && [ "$holds_validation" = 0 ]; then
+    echo "make-training-data: $OUT holds a training set; make the validation scenes in an OUT of their own" >&2; exit 2
+  fi
+  if [ "$TRAINING_PART" != validation ] && [ "$holds_validation" != 0 ]; then
+    echo "make-training-data: $OUT holds the validation scenes, which no network may train on; use another OUT" >&2; exit 2
+  fi
+fi
+PART_KEY=$( [ "$TRAINING_PART" = validation ] && echo '"part": "validation", ' || true )
 case $LENS_MASK_RULE in
   perceptible) MASK_RULE_KEY="" ;;
   coverage) MASK_RULE_KEY=", \"mask_rule\": \"coverage\"" ;;
@@ -157,10 +181,11 @@ render_all() {
   if [ $failed -ne 0 ]; then echo "make-training-data: a render failed (see above)" >&2; return 2; fi
 }
 
-make_base() {  # the training scenes, their overcast bases and the photographs
+make_scenes() {  # the training scenes (SCENES) and their overcast bases (unless `clear_only`)
   local renders=() si vi
   for si in "${!SCENES[@]}"; do
     renders+=("$HERE/scenes/training/${SCENES[$si]}.json|clear|${SCENES[$si]}")
+    [ "${1:-}" = clear_only ] && continue
     for vi in "${!VARIANTS[@]}"; do
       renders+=("$HERE/scenes/training/${SCENES[$si]}.json|${VARIANTS[$vi]}|${SCENES[$si]}_${VARIANTS[$vi]}")
     done
@@ -169,6 +194,7 @@ make_base() {  # the training scenes, their overcast bases and the photographs
   for si in "${!SCENES[@]}"; do
     weather_all "${SCENES[$si]}" "${SCENE_INDEX[$si]}" "$WEATHERS"
   done
+  [ "${1:-}" = clear_only ] && return 0
 
   # The overcast bases (scene index 20 + 2 * scene + variant in the weather table: seeds of their own).
   for si in "${!SCENES[@]}"; do
@@ -177,7 +203,9 @@ make_base() {  # the training scenes, their overcast bases and the photographs
       weather_all "${SCENES[$si]}_$variant" "$((20 + 2 * ${SCENE_INDEX[$si]} + vi))" "$VARIANT_WEATHERS" "EFFECTS_$variant"
     done
   done
+}
 
+make_photos() {
   # Photographs: a 16-view pan at the profile's size, then PHOTO_WEATHERS weathers (scene index 4 + i
   # in the weather table, so their mixes differ from the scenes').
   size=$( [ "$PROFILE" = quick ] && echo "--width 300 --height 200" || echo "--width 600 --height 400" )
@@ -211,18 +239,23 @@ make_assorted() {
   done
 }
 
-if [ "$TRAINING_PART" != assorted ]; then make_base; fi
-if [ "$TRAINING_PART" != base ] && [ "$ASSORTED_SCENES" -gt 0 ]; then make_assorted; fi
+case $TRAINING_PART in
+  all | base) make_scenes ;;
+  validation) make_scenes clear_only ;;
+esac
+case $TRAINING_PART in all | base) make_photos ;; esac
+case $TRAINING_PART in all | assorted) if [ "$ASSORTED_SCENES" -gt 0 ]; then make_assorted; fi ;; esac
 
 seconds=$(( $(date +%s) - start ))
 datasets=$(find "$OUT" -mindepth 2 -maxdepth 2 -name dataset.json -not -path "$OUT/clear/*" | wc -l)
 views=$(find "$OUT" -path "$OUT/clear" -prune -o -path "*/images/*.png" -print | wc -l)
 size=$(du -sm "$OUT" | cut -f1)
+photos_made=$(find "$OUT/clear" -mindepth 2 -maxdepth 2 -name dataset.json -path "$OUT/clear/photo_*" | wc -l)
 assorted_made=$(find "$OUT/clear" -mindepth 2 -maxdepth 2 -name dataset.json -path "$OUT/clear/assorted_*" | wc -l)
 cat > "$OUT/manifest.json" <<EOF
-{"format": "weathergs-training-set", "scenes": [$(printf '"%s", ' "${SCENES[@]}" | sed 's/, $//')], "profile": "$PROFILE", "lens_mask_rule": "$LENS_MASK_RULE",
+{"format": "weathergs-training-set", $PART_KEY"scenes": [$(printf '"%s", ' "${SCENES[@]}" | sed 's/, $//')], "profile": "$PROFILE", "lens_mask_rule": "$LENS_MASK_RULE",
  "weathers_per_scene": $WEATHERS, "overcast_variants": [$(printf '"%s", ' "${VARIANTS[@]}" | sed 's/, $//')], "weathers_per_variant": $VARIANT_WEATHERS,
- "photos": ${#PHOTOS[@]}, "weathers_per_photo": $PHOTO_WEATHERS, "assorted_scenes": $assorted_made, "weathers_per_assorted": $ASSORTED_WEATHERS, "assorted_seed": $ASSORTED_SEED, "datasets": $datasets, "views": $views, "size_mb": $size,
+ "photos": $photos_made, "weathers_per_photo": $PHOTO_WEATHERS, "assorted_scenes": $assorted_made, "weathers_per_assorted": $ASSORTED_WEATHERS, "assorted_seed": $ASSORTED_SEED, "datasets": $datasets, "views": $views, "size_mb": $size,
  "seconds_this_run": $seconds, "recipe": "scripts/make-training-data.sh"}
 EOF
 echo "training set: $datasets datasets, $views views, $size MB in $OUT ($seconds s this run)"

@@ -48,6 +48,9 @@ make_assorted() {
   weathers=$(grep -o '"weathers_per_scene": [0-9]*' "$manifest" | grep -o '[0-9]*$')
   TRAINING_PART=assorted bash "$HERE/scripts/make-training-data.sh" "$BIN" "$DATA" "$weathers" "$profile"
 }
+if [ -f "$DATA/manifest.json" ] && grep -q '"part": "validation"' "$DATA/manifest.json"; then
+  echo "train-models: $DATA holds the validation scenes (TRAINING_PART=validation), which no network trains on" >&2; exit 2
+fi
 led_runs() { [ "$ONLY" = all ] || [ "$ONLY" = led ]; }
 if [ "$LED_ASSORTED" = train ] && led_runs; then make_assorted; fi  # they train: needed first
 # Datasets and clear renders that only the LED uses: the photographs, the overcast bases and the
