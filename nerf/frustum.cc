@@ -121,7 +121,7 @@ double near_from_points(const std::vector<Camera>& cameras, const std::vector<Ei
     const double d = (r * (p - c)).z();
     if (d > 0 && std::isfinite(d)) z.push_back(d);
   }
-  if (z.size() < 10) return fallback_m;
+  if (z.size() < kNearMinPoints) return fallback_m;
   const size_t k = z.size() / 100;
   std::nth_element(z.begin(), z.begin() + k, z.end());
   return std::max(min_near_m, 0.5 * z[k]);
@@ -133,7 +133,7 @@ std::vector<Eigen::Vector3d> near_plane_points(const std::vector<ColmapPoint3D>&
     all.push_back(p.xyz);
     if (p.track.size() >= kNearMinTrack) checked.push_back(p.xyz);
   }
-  return checked.size() >= 10 ? checked : all;
+  return checked.size() >= kNearMinPoints ? checked : all;
 }
 
 }  // namespace weathergs::nerf

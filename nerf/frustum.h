@@ -34,15 +34,17 @@ struct FrustumFrame {
 // plane), naming the camera. `cameras` must not be empty.
 FrustumFrame forward_facing_frame(const std::vector<Camera>& cameras, double near_m);
 
+// The fewest SfM points a near plane is taken from (near_from_points, near_plane_points).
+inline constexpr size_t kNearMinPoints = 10;
 // The near plane from SfM points (world): half their 1st-percentile depth in the reference frame of
 // `cameras` (cameras sit up to ~1 m before or behind the reference plane on our captures, and SfM
 // rarely has points on the nearest ground), at least `min_near_m`. Returns `fallback_m` when there
-// are fewer than 10 points in front.
+// are fewer than kNearMinPoints points in front.
 double near_from_points(const std::vector<Camera>& cameras, const std::vector<Eigen::Vector3d>& points,
                         double min_near_m, double fallback_m);
 
 // The SfM points the near plane is taken from: those seen by at least kNearMinTrack views, or all of
-// them when fewer than 10 are. A point triangulated from two views has no third view to check it, and
+// them when fewer than kNearMinPoints are. A point triangulated from two views has no third view to check it, and
 // the 1st percentile of a small model is its second-nearest point: on the 2026-11-28 quick suite two
 // whitish two-view points of pool_snow's 148 (probably falling snow matched across two views) lay
 // 0.1-0.9 m in front of a camera whose median point lies at 13 m, and put the near plane ~10x closer

@@ -117,7 +117,7 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
     if (fs::exists(pts_file)) sfm = read_colmap_points3d(pts_file.string());
     const std::vector<Eigen::Vector3d> pts = near_plane_points(sfm);
     near = near_from_points(ds.cameras, pts, kMinNearM, kDefaultNearM);
-    result.near_source = pts.size() >= 10 ? "sfm points: " + std::to_string(pts.size()) + " of " + std::to_string(sfm.size()) +
+    result.near_source = pts.size() >= kNearMinPoints ? "sfm points: " + std::to_string(pts.size()) + " of " + std::to_string(sfm.size()) +
                                                 (pts.size() < sfm.size() ? " (track >= " + std::to_string(kNearMinTrack) + ")" : "")
                                           : "default (no SfM points)";
   }
