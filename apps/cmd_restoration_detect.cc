@@ -6,6 +6,8 @@
 #include "apps/command.h"
 #include "apps/resources.h"
 #include "restoration/detect_dataset.h"
+#include "core/parallel.h"
+#include "study/led_adaptation.h"
 
 namespace weathergs::cli {
 namespace {
@@ -16,6 +18,8 @@ struct DetectArgs {
   bool per_view = false;
   std::vector<double> band{0.5, 0.7};
   std::vector<double> peak;
+  bool adapt = false;
+  study::LedAdaptOptions adapt_options;
   restoration::DetectDatasetOptions options;
 };
 
@@ -39,6 +43,12 @@ int run(DetectArgs& a) {
   if (!a.peak.empty()) a.options.mask.peak = restoration::LedPeakRule{a.peak[0], a.peak[1], a.peak[2]};
   a.options.mask.band_lo = a.band[0];
   a.options.mask.band_hi = a.band[1];
+  if (a.adapt) {
+    a.adapt_options.validate();
+    a.options.adapt = [opts = a.adapt_options](const restoration::LensDetector& base, const Dataset& ds,
+                                               const std::vector<std::string>& views, const std::vector<Image>& images,
+                                               Json& report) { return study::adapt_led(base, ds, views, images, opts, report); };
+  }
   const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
   double mean = 0;
   for (const auto& v : r.views) mean += v.mask_fraction / double(r.views.size());
@@ -84,7 +94,16 @@ Command make(CLI::App& root) {
       ->check(CLI::Range(0, restoration::kMaxDilations));
   sub->add_flag("--save-attention", a->options.save_attention,
                 "Also write the soft attention behind each mask as attention/<view>.png (16-bit, value = attention)");
-  return {sub, [a] { return run(*a); }};
+  sub->add_flag("--adapt", a->adapt,
+                "Adapt the network to this scene first: fine-tune a copy on the training views with new lens drops "
+                "rendered over them (about a minute on 2 cores; docs/restoration_led.md, \"Adapted to the scene\")");
+  sub->add_option("--adapt-iterations", a->adapt_options.iterations, "Fine-tuning iterations of --adapt")->capture_default_str();
+  sub->add_option("--adapt-layouts", a->adapt_options.layouts, "Drop layouts rendered over every training view by --adapt")
+      ->capture_default_str();
+  return {sub, [a] {
+            a->adapt_options.threads = num_threads();
+            return run(*a);
+          }};
 }
 
 }  // namespace

@@ -81,6 +81,9 @@ Command make(CLI::App& root) {
                   "sqrt(R / area), at most 4 (0 = off, the paper's plain MSE)")
       ->check(CLI::Range(0.0, 1e6))
       ->capture_default_str();
+  sub->add_option("--init", a->options.init, "Start from these weights (architecture, calibration) instead of a fresh network");
+  sub->add_option("--ignore-mask", a->options.ignore_mask,
+                  "Mask PNG (255 = leave out of the loss unless the view's own mask marks a drop), for every view");
   return {sub, [a, sub] {
             a->command = recorded_command("train-led", *sub);
             return run(*a);

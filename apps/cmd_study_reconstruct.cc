@@ -5,6 +5,7 @@
 #include "apps/command.h"
 #include "apps/evaluator_flags.h"
 #include "apps/resources.h"
+#include "core/parallel.h"
 #include "core/progress.h"
 #include "study/reconstruct.h"
 
@@ -17,6 +18,7 @@ struct ReconstructArgs {
   bool no_triangulate = false;
   std::string led_weights, aef_weights;
   double led_threshold = 0;
+  bool led_adapt = false;
   std::string mask_normalization = "valid";
   std::string large_prune = "distance";
   ScoringFlags scoring;
@@ -33,6 +35,10 @@ int run(ReconstructArgs& a) {
   if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
   if (study::recipe(o.method).particle_filter && study::recipe(o.method).aef == restoration::FilterMethod::kLearned)
     o.aef_weights = find_aef_weights(a.aef_weights);
+  if (a.led_adapt) {
+    o.led_adapt = study::LedAdaptOptions{};
+    o.led_adapt->threads = num_threads();
+  }
   if (a.led_threshold > 0) {  // a global threshold: the paper's rule, also for weights with a peak rule
     o.led_mask.rule = restoration::LedThresholdRule::kAbove;
     o.led_mask.threshold = a.led_threshold;
@@ -125,6 +131,9 @@ Command make(CLI::App& root) {
   sub->add_option("--led-threshold", a->led_threshold,
                   "LED mask where the attention >= t (default: the weights' calibrated rule, docs/restoration_led.md)")
       ->check(CLI::Range(0.0, 1.0));
+  sub->add_flag("--led-adapt", a->led_adapt,
+                "Adapt the LED to the dataset first (`detect --adapt`: a fine-tune on the training views with new lens "
+                "drops, about a minute on 2 cores; docs/restoration_led.md, \"Adapted to the scene\")");
   a->scoring.add_to(sub);
   return {sub, [a] { return run(*a); }};
 }

@@ -11,7 +11,7 @@ runs `weathergs detect` on each (the default post-processing) and prints IoU / p
 masks/lens (the `perceptible` truth) and against the drops' lens coverage >= 0.1 (both as `detect`
 reports them in detect.json), per dataset, then the mean and standard deviation over the seeds.
 
-Usage: restoration_led_layouts.py WEATHERGS OUT [--seeds 101-108] [--weights STEM] [--suite data/suite_paper]
+Usage: restoration_led_layouts.py WEATHERGS OUT [--seeds 101-108] [--weights STEM] [--suite data/suite_paper] [--adapt]
   Run in the repository root (the suite and scenes/ are read from there). Datasets and masks are
   cached in OUT. Seed 7 is the benchmark's own draw.
 """
@@ -61,6 +61,8 @@ def main():
     p.add_argument("--seeds", type=seeds, default=seeds("101-108"), help="weather seeds, a list of seeds and ranges: 7,101-108 (101-108)")
     p.add_argument("--weights", help="LED weights stem (default: the installed ones)")
     p.add_argument("--suite", default="data/suite_paper", help="where the benchmark's rain variants are")
+    p.add_argument("--adapt", action="store_true",
+                   help="detect with --adapt (docs/restoration_led.md, \"Adapted to the scene\"); masks go to OUT/masks_adapt")
     args = p.parse_args()
     os.makedirs(os.path.join(args.out, "specs"), exist_ok=True)
     print("| scene | seed | vs masks/lens: IoU / precision | vs coverage >= 0.1: IoU / precision |")
@@ -80,9 +82,10 @@ def main():
                 subprocess.run([args.weathergs, "--quiet", "weather", "--in", base, "--spec", spec_path, "--seed",
                                 str(seed), "--out", d, "--name", f"{scene}_rain", "--targets", "--no-manifest"],
                                check=True, stdout=subprocess.DEVNULL)
-            m = os.path.join(args.out, "masks", f"{scene}_s{seed}")
+            m = os.path.join(args.out, "masks_adapt" if args.adapt else "masks", f"{scene}_s{seed}")
             subprocess.run([args.weathergs, "--quiet", "detect", "--data", d, "--out", m]
-                           + (["--weights", args.weights] if args.weights else []), check=True, stdout=subprocess.DEVNULL)
+                           + (["--weights", args.weights] if args.weights else []) + (["--adapt"] if args.adapt else []),
+                           check=True, stdout=subprocess.DEVNULL)
             report = json.load(open(os.path.join(m, "detect.json")))
             g, c = report["ground_truth"], report["ground_truth_coverage"]  # detect scores both truths
             ci, cp = c["iou"], c["precision"]

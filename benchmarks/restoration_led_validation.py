@@ -14,7 +14,10 @@ drop-free dataset's pixels masked. With --against W2 it scores W2 the same way a
 difference of the IoU (W minus W2) with its standard error, and the verdict of the rule set before the
 third draw was read: the higher mean IoU wins, within --margin (0.005) the incumbent (W2) stays.
 
-Usage: restoration_led_validation.py WEATHERGS VALIDATION OUT [--weights W] [--against W2] [--margin 0.005]
+With --adapt the first weights run as `detect --adapt` (docs/restoration_led.md, "Adapted to the scene"):
+`--adapt --against models/led/led` compares the adapted LED with the same weights as they are.
+
+Usage: restoration_led_validation.py WEATHERGS VALIDATION OUT [--weights W] [--adapt] [--against W2] [--margin 0.005]
   Masks go to OUT/<tag>/<dataset>/ (tag a, b). Run in the repository root (the default weights are
   read from there).
 """
@@ -29,14 +32,15 @@ import sys
 import numpy as np
 
 
-def score(weathergs, datasets, out, weights):
+def score(weathergs, datasets, out, weights, adapt=False):
     """{dataset: (iou, precision, recall, gt_fraction, mask_fraction)} from detect.json."""
     rows = {}
     for d in datasets:
         name = os.path.basename(d)
         m = os.path.join(out, name)
         subprocess.run([weathergs, "--quiet", "detect", "--data", d, "--out", m]
-                       + (["--weights", weights] if weights else []), check=True, stdout=subprocess.DEVNULL)
+                       + (["--weights", weights] if weights else []) + (["--adapt"] if adapt else []),
+                       check=True, stdout=subprocess.DEVNULL)
         report = json.load(open(os.path.join(m, "detect.json")))
         g = report["ground_truth"]
         if g is None:  # no masks/lens: a drop-free dataset; only what was masked counts
@@ -70,6 +74,8 @@ def main():
     p.add_argument("--weights", help="LED weights stem (default: the installed ones)")
     p.add_argument("--against", help="a second weights stem, the incumbent: prints the paired comparison")
     p.add_argument("--margin", type=float, default=0.005, help="IoU difference within which the incumbent stays")
+    p.add_argument("--adapt", action="store_true",
+                   help="run --weights with `detect --adapt` (adapted to each dataset); --against may name the same weights")
     args = p.parse_args()
     manifest = os.path.join(args.validation, "manifest.json")
     if not os.path.exists(manifest) or '"part": "validation"' not in open(manifest).read():
@@ -79,7 +85,7 @@ def main():
                       if os.path.exists(os.path.join(d, "dataset.json")))
     if not datasets:
         sys.exit(f"{args.validation}: no <scene>_wNN datasets")
-    a = score(args.weathergs, datasets, os.path.join(args.out, "a"), args.weights)
+    a = score(args.weathergs, datasets, os.path.join(args.out, "a"), args.weights, args.adapt)
     b = score(args.weathergs, datasets, os.path.join(args.out, "b"), args.against) if args.against else {}
     print("| dataset | IoU / precision / recall (weights) |" + (" IoU / precision / recall (against) |" if b else ""))
     print("|---|---|" + ("---|" if b else ""))
@@ -87,7 +93,7 @@ def main():
         cells = [f"{v[0]:.3f} / {v[1]:.3f} / {v[2]:.3f}" if v[3] > 0 else f"no drops: {100 * v[4]:.2f} % masked"
                  for v in ([a[name]] + ([b[name]] if b else []))]
         print(f"| {name} | " + " | ".join(cells) + " |")
-    drops = summary("weights " + (args.weights or "installed"), a)
+    drops = summary("weights " + (args.weights or "installed") + (", adapted" if args.adapt else ""), a)
     if not b:
         return
     summary("against " + args.against, b)

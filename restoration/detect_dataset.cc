@@ -190,8 +190,10 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   if (o.batch < 1 || o.batch > 64) throw InputError("detect batch", "expected 1..64, got " + std::to_string(o.batch));
   const auto start = std::chrono::steady_clock::now();
   const Dataset ds = read_dataset(dataset);
-  const LensDetector led = LensDetector::load(o.weights);
+  LensDetector led = LensDetector::load(o.weights);
   const LedMaskOptions mask_options = o.mask.resolved(led);
+  if (o.adapt && o.averaging != LedAveraging::kTrainViews)
+    throw InputError("detect --adapt", "adapts to drops fixed to the lens: it needs the train-views averaging, not --per-view");
   auto input_path = [&](const std::string& view) {
     return o.images_dir.empty() ? ds.path(ImageKind::kImages, view) : (fs::path(o.images_dir) / (view + layout::kImageExt)).string();
   };
@@ -216,6 +218,8 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
     names.push_back(c.name);
     images.push_back(std::move(img));
   }
+  Json adaptation;
+  if (o.adapt) led = o.adapt(led, ds, names, images, adaptation);
   const auto net_start = std::chrono::steady_clock::now();
   std::vector<Image> attention;
   {
@@ -283,6 +287,7 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
                {"images", o.images_dir.empty() ? std::string(layout::kImagesDir) : fs::absolute(o.images_dir).lexically_normal().string()},
                {"weights", fs::absolute(o.weights + ".json").lexically_normal().string()},
                {"weights_sha256", led.metadata().value("weights_sha256", "")},
+               {"adaptation", adaptation},
                {"averaging", to_string(o.averaging)},
                {"averaged_views", o.averaging == LedAveraging::kTrainViews ? Json(names) : Json()},
                {"rule", to_string(*mask_options.rule)},

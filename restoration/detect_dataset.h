@@ -2,11 +2,14 @@
 // masks for 3DGS (docs/restoration_led.md). libtorch-free: the network is behind restoration/lens_detector.h.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "core/dataset.h"
 #include "core/image.h"
+#include "core/json_reader.h"
 #include "restoration/lens_detector.h"
 
 namespace weathergs::restoration {
@@ -57,6 +60,14 @@ struct LedScore {
 };
 LedScore score_lens_masks(const std::string& name, const std::vector<Image>& predicted, const std::vector<Image>& truth);
 
+// Test-time adaptation of the network to the dataset before it runs (study/led_adaptation.h supplies
+// one: restoration cannot render drops). Gets the loaded network, the dataset and its training views
+// as read (names and images, dataset order); returns the network to run and fills `report`, which
+// detect.json stores as "adaptation".
+using LedAdaptation = std::function<LensDetector(const LensDetector& base, const Dataset& dataset,
+                                                 const std::vector<std::string>& views,
+                                                 const std::vector<Image>& images, Json& report)>;
+
 struct DetectDatasetOptions {
   std::string weights = kDefaultLedWeights;  // stem of <stem>.json + <stem>.bin
   std::string images_dir;  // detect on these <view>.png instead of the dataset's images/ (e.g. AEF output)
@@ -64,6 +75,7 @@ struct DetectDatasetOptions {
   LedMaskOptions mask;
   int batch = 1;           // views per network call (batches of 4 measured slower per view)
   bool save_attention = false;  // also write <out>/attention/<view>.png (kDetectAttentionDir)
+  LedAdaptation adapt;     // empty: the weights as they are. Needs kTrainViews averaging.
 };
 
 struct DetectViewReport {

@@ -172,8 +172,20 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
       examples.push_back(std::move(e));
     }
   result.examples = examples.size();
-  LensDetector led(o.train.arch, o.train.seed);
-  result.record = led.train(examples, o.train);
+  if (!o.ignore_mask.empty()) {
+    const Image ignore = read_mask(o.ignore_mask);
+    for (LedExample& e : examples) {
+      if (ignore.width != e.image.width || ignore.height != e.image.height)
+        throw InputError(o.ignore_mask, "is " + ignore.to_string() + ", the views are " + e.image.to_string());
+      e.weight = Image(e.image.width, e.image.height, 1, ColorSpace::kLinear);
+      for (size_t i = 0; i < e.weight.data.size(); ++i)
+        e.weight.data[i] = std::max(e.mask.data[i] > 0.5f ? 1.f : 0.f, 1.f - ignore.data[i]);
+    }
+  }
+  LensDetector led = o.init.empty() ? LensDetector(o.train.arch, o.train.seed) : LensDetector::load(o.init);
+  LedTrainOptions train = o.train;
+  train.arch = led.architecture();
+  result.record = led.train(examples, train);
   examples.clear();
   if (!held_out.empty()) {
     result.calibration = calibrate_led(led, held_out, o.mask, o.calibrate_dilations, o.calibrate_peak);

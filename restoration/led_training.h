@@ -50,6 +50,11 @@ struct TrainLedOptions {
   // Also calibrate the peak-relative rule and store it with the weights (detect's default rule then).
   bool calibrate_peak = false;
   std::string command;  // the command line, recorded in the manifest
+  // Start from these weights (their architecture and calibration) instead of a fresh network.
+  std::string init;
+  // A lens-fixed mask (PNG, 255 = leave out) applied to every training view: those pixels do not count
+  // in the loss unless the view's own mask marks a drop there.
+  std::string ignore_mask;
 };
 struct TrainLedResult {
   LedTrainRecord record;

@@ -1,4 +1,5 @@
 // The only translation unit of the LED that includes libtorch (~17 s to compile).
+#include <algorithm>
 #include "restoration/lens_detector.h"
 
 #include <torch/torch.h>
@@ -144,7 +145,7 @@ torch::Tensor attention_loss(const std::vector<torch::Tensor>& maps, const torch
   torch::Tensor loss = torch::zeros({});
   const int n = int(maps.size());
   for (int t = 0; t < n; ++t) {
-    const torch::Tensor mse = weight.defined() ? ((maps[size_t(t)] - target).square() * weight).sum() / weight.sum()
+    const torch::Tensor mse = weight.defined() ? ((maps[size_t(t)] - target).square() * weight).sum() / weight.sum().clamp_min(1e-6)
                                                : F::mse_loss(maps[size_t(t)], target);
     loss = loss + std::pow(theta, n - 1 - t) * mse;
   }
@@ -292,6 +293,22 @@ LensDetector::LensDetector(const LedArchitecture& arch, uint64_t seed) : impl_(s
   impl_->net->eval();
 }
 
+LensDetector LensDetector::clone() const {
+  LensDetector c(impl_->arch, 0);
+  {
+    torch::NoGradGuard no_grad;
+    const auto src = impl_->net->named_parameters(), dst = c.impl_->net->named_parameters();
+    for (const auto& p : src) dst[p.key()].copy_(p.value());
+    const auto src_b = impl_->net->named_buffers(), dst_b = c.impl_->net->named_buffers();
+    for (const auto& b : src_b) dst_b[b.key()].copy_(b.value());
+  }
+  c.impl_->threshold = impl_->threshold;
+  c.impl_->dilate_iterations = impl_->dilate_iterations;
+  c.impl_->peak_rule = impl_->peak_rule;
+  c.impl_->metadata = impl_->metadata;
+  return c;
+}
+
 const LedArchitecture& LensDetector::architecture() const { return impl_->arch; }
 void LensDetector::set_width(int width) {
   LedArchitecture a = impl_->arch;
@@ -355,9 +372,23 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
   std::vector<torch::Tensor> xs, ms;
   examples_to_tensors(examples, impl_->arch, "LED training example ", xs, ms);
   std::vector<torch::Tensor> ws;
-  const bool balance = o.drop_balance_area > 0;
-  if (balance)
+  const bool weighted = std::any_of(examples.begin(), examples.end(), [](const LedExample& e) { return !e.weight.data.empty(); });
+  const bool balance = o.drop_balance_area > 0 || weighted;
+  if (o.drop_balance_area > 0)
     for (const torch::Tensor& m : ms) ws.push_back(drop_balance_weights(m, o.drop_balance_area));
+  if (weighted)
+    for (size_t i = 0; i < examples.size(); ++i) {
+      const LedExample& e = examples[i];
+      if (e.weight.data.empty()) {
+        if (ws.size() <= i) ws.push_back(torch::ones_like(ms[i]));
+        continue;
+      }
+      if (e.weight.channels != 1 || e.weight.width != e.image.width || e.weight.height != e.image.height)
+        throw InputError("LED training example " + std::to_string(i), "weight " + e.weight.to_string() + " does not match image " + e.image.to_string());
+      const torch::Tensor w = mask_to_tensor(e.weight, int(ms[i].size(2)), int(ms[i].size(1)));
+      if (ws.size() <= i) ws.push_back(w);
+      else ws[i] = ws[i] * w;
+    }
   LedNet& net = impl_->net;
   net->train();
   torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(o.learning_rate));

@@ -96,6 +96,9 @@ struct LedExample {
   Image image;
   Image mask;
   int group = 0;  // the dataset it comes from: a view-pooling network trains on one group per batch
+  // Optional per-pixel loss weight in [0, 1] (1 channel, the image's size; empty = 1 everywhere):
+  // test-time adaptation leaves the scene's own, unlabelled drops out of the loss with it.
+  Image weight{};
 };
 
 struct LedTrainRecord {
@@ -117,6 +120,9 @@ class LensDetector {
   static LensDetector load(const std::string& stem);
   // Writes both files atomically; `extra` (training record, calibration, ...) is merged into the JSON.
   void save(const std::string& stem, const Json& extra) const;
+
+  // An independent copy (parameters, calibration, metadata): test-time adaptation trains the copy.
+  LensDetector clone() const;
 
   const LedArchitecture& architecture() const;
   // Runs the same network at another internal width (no parameter depends on it; a larger width

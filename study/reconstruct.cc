@@ -46,6 +46,7 @@ void ReconstructOptions::validate() const {
     if (it < 1) throw InputError("reconstruct options", "eval_at holds " + std::to_string(it) + ": iterations must be >= 1");
   colmap.validate();
   led_mask.validate();
+  if (led_adapt) led_adapt->validate();
   nerf.validate("reconstruct options: nerf");
   if (recipe(method).particle_filter && recipe(method).aef == restoration::FilterMethod::kLearned && aef_weights.empty())
     throw InputError("reconstruct options", std::string("aef_weights is empty: method ") + to_string(method) +
@@ -121,12 +122,24 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   }
 
   // 2b. The LED on the raw views (method.h says why), averaged over the training views.
-  if (r.lens_detector && !fs::exists(run / kDetectedDir / restoration::kDetectReportFile)) {
+  const fs::path detect_report = run / kDetectedDir / restoration::kDetectReportFile;
+  if (r.lens_detector && fs::exists(detect_report)) {  // resuming: the masks must be the ones asked for
+    const bool adapted = !read_json_file(detect_report.string()).value("adaptation", Json()).is_null();
+    if (adapted != (o.led_adapt && !r.led_per_view))
+      throw InputError(detect_report.string(), std::string("holds LED masks made ") + (adapted ? "with" : "without") +
+                                                   " --led-adapt, this run asks for them " + (adapted ? "without" : "with") +
+                                                   " it: pass --force to redo the run");
+  }
+  if (r.lens_detector && !fs::exists(detect_report)) {
     stage("detecting lens drops (LED, averaged over the training views)");
     restoration::DetectDatasetOptions d;
     d.weights = o.led_weights;
     d.mask = o.led_mask;
     if (r.led_per_view) d.averaging = restoration::LedAveraging::kPerView;
+    if (o.led_adapt && !r.led_per_view)
+      d.adapt = [opts = *o.led_adapt](const restoration::LensDetector& base, const Dataset& dataset,
+                                      const std::vector<std::string>& views, const std::vector<Image>& images,
+                                      Json& report) { return adapt_led(base, dataset, views, images, opts, report); };
     restoration::detect_dataset(o.dataset, (run / kDetectedDir).string(), d);
   }
 

@@ -24,6 +24,7 @@
 #include "nerf/run.h"
 #include "reconstruction/run.h"
 #include "restoration/detect_dataset.h"
+#include "study/led_adaptation.h"
 #include "restoration/particle_filter.h"
 #include "study/method.h"
 
@@ -65,6 +66,9 @@ struct ReconstructOptions {
   std::string aef_weights;
   std::string led_weights;  // weathergs, weathergs-no-aef: the LED weights stem (required for them)
   restoration::LedMaskOptions led_mask;
+  // Adapt the LED to the dataset before it runs (`detect --adapt`; docs/restoration_led.md, "Adapted to
+  // the scene"). Unset: the weights as they are. Ignored by weathergs-per-view (drops that move).
+  std::optional<LedAdaptOptions> led_adapt;
   // Radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle); its seed is `seed`.
   nerf::NerfOptions nerf;
 

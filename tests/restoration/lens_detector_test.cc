@@ -28,14 +28,7 @@ LedExample toy_example(int w, int h, uint64_t seed, int index, bool drops) {
   return testing_util::textured_view_with_drops(w, h, Rng(seed, 7, uint64_t(index)), centres, 0.12 * w);
 }
 
-LedArchitecture tiny_arch() {
-  LedArchitecture a;
-  a.width = 32;
-  a.channels = 6;
-  a.steps = 2;
-  a.residual_blocks = 2;
-  return a;
-}
+using testing_util::tiny_arch;
 
 TEST(LensDetectorTest, ShapesRangeAndParameterCount) {
   const LedArchitecture a;  // the shipped architecture

@@ -36,6 +36,16 @@ inline LedExample textured_view_with_drops(int w, int h, Rng rng, const std::vec
   return e;
 }
 
+// A network small enough for a test to train in seconds.
+inline LedArchitecture tiny_arch() {
+  LedArchitecture a;
+  a.width = 32;
+  a.channels = 6;
+  a.steps = 2;
+  a.residual_blocks = 2;
+  return a;
+}
+
 // Runs `weathergs --quiet ARGS`, output to `log`; the exit status (-1 if it did not exit).
 inline int run_cli(const std::string& args, const std::string& log) {
   const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet " + args + " > '" + log + "' 2>&1").c_str());

@@ -172,6 +172,35 @@ TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
   EXPECT_EQ(read_file(a + "/model/point_cloud.ply"), read_file(b + "/model/point_cloud.ply"));
 }
 
+// --led-adapt: the LED's masks say they were adapted (detect.json's "adaptation"), and a run resumed
+// with the other choice refuses the masks it holds instead of mixing them in.
+TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  const std::string run = tmp / "run";
+  ReconstructOptions o = options(data, run, Method::kWeatherGSNoAef);
+  o.led_adapt = LedAdaptOptions{};
+  o.led_adapt->layouts = 1;
+  o.led_adapt->iterations = 4;
+  o.led_adapt->threads = 1;
+  o.led_adapt->progress = false;
+  struct Stop {};
+  try {
+    reconstruct(o, [](const recon::IterationStats& st) {
+      if (st.iteration == 60) throw Stop{};  // after the checkpoint at 50
+    });
+    ADD_FAILURE() << "not interrupted";
+  } catch (const Stop&) {
+  }
+  const Json d = read_json_file(run + "/detected/detect.json");
+  ASSERT_TRUE(d.contains("adaptation"));
+  EXPECT_EQ(d.at("adaptation").at("iterations"), 4);
+  EXPECT_EQ(d.at("adaptation").at("layouts").size(), 1u);
+  EXPECT_THROW(reconstruct(options(data, run, Method::kWeatherGSNoAef)), InputError);
+  EXPECT_TRUE(reconstruct(o).resumed);
+  EXPECT_TRUE(fs::exists(run + "/results.json"));
+}
+
 TEST(ReconstructTest, WithoutPointsItTriangulatesIntoTheRunOrFallsBackWithAWarning) {
   if (datagen::find_executable("colmap").empty()) GTEST_SKIP() << "colmap not installed";
   TempDir tmp;

@@ -1,0 +1,60 @@
+// Test-time adaptation of the Lens Effect Detector to one scene (docs/restoration_led.md, "Adapted to
+// the scene"). The shipped LED carries over to a scene it has not seen less well than to one it was
+// trained on (restoration_led_targets.md, "The network meets the targets on scenes it has seen"). This
+// fine-tunes a copy of it on the scene's own training views with new lens drops rendered over them by
+// the generator's lens model: the new drops' masks are exact, and the scene's own drops (unlabelled:
+// no method knows where they are) are left out of the loss where the base network's averaged map
+// reaches `ignore_level`. No ground truth of the scene is used. Lives in study/ because it needs both
+// the generator (drops) and restoration (the network); `weathergs detect --adapt` and the WeatherGS
+// recipes' `--led-adapt` run it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/dataset.h"
+#include "core/image.h"
+#include "core/json_reader.h"
+#include "restoration/lens_detector.h"
+
+namespace weathergs::study {
+
+struct LedAdaptOptions {
+  // Drop layouts rendered over every training view. Layout k (0-based) follows the LED training
+  // set's recipe (scripts/make-training-data.sh: radius 0.3-1.5 mm, glass at 15 mm), with the style
+  // and count of kAdaptLayouts[k % 4] and weather seed kAdaptSeedBase + k + 1.
+  int layouts = 4;
+  int iterations = 300;
+  double learning_rate = 5e-4;  // a tenth of the training recipe's: a fine-tune, not a new network
+  int batch = 4;
+  // The base network's averaged attention at or above this level, dilated ignore_dilations times
+  // (3x3 cross), is left out of the loss unless a new drop covers the pixel.
+  double ignore_level = 0.2;
+  int ignore_dilations = 3;
+  uint64_t seed = 1;   // batch order and flips
+  int threads = 0;     // libtorch threads of the fine-tune (0 = all cores)
+  bool progress = true;
+  void validate() const;  // InputError naming the option
+};
+
+struct LedAdaptLayout {
+  const char* style;  // "paper" or "physical" (generator styles, DATASET_FORMAT.md)
+  int count;          // drops on the glass
+};
+inline constexpr LedAdaptLayout kAdaptLayouts[4] = {{"physical", 40}, {"paper", 30}, {"physical", 50}, {"paper", 20}};
+inline constexpr uint64_t kAdaptSeedBase = 9000;
+inline constexpr double kAdaptRadiusMm[2] = {0.3, 1.5};
+inline constexpr double kAdaptGlassDistanceM = 0.015;
+
+// The weather spec of layout k (0-based): {"seed", "style", "effects": {"lens_droplets": {...}}}.
+Json adapt_layout_spec(int k);
+
+// The copy of `base` fine-tuned on `images` (sRGB, the training views `views` of `dataset`, in dataset
+// order). `report` gets the options, the layouts, the ignored fraction, the loss and the seconds.
+// Deterministic for a given thread count.
+restoration::LensDetector adapt_led(const restoration::LensDetector& base, const Dataset& dataset,
+                                    const std::vector<std::string>& views, const std::vector<Image>& images,
+                                    const LedAdaptOptions& options, Json& report);
+
+}  // namespace weathergs::study

@@ -1,0 +1,151 @@
+// Test-time adaptation of the LED (study/led_adaptation.h, `weathergs detect --adapt`).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/dataset.h"
+#include "core/error.h"
+#include "core/rng.h"
+#include "restoration/detect_dataset.h"
+#include "study/led_adaptation.h"
+#include "tests/core/test_util.h"
+#include "tests/restoration/restoration_test_util.h"
+
+namespace weathergs::study {
+namespace {
+
+namespace fs = std::filesystem;
+using restoration::LensDetector;
+
+using restoration::testing_util::tiny_arch;
+
+struct Scene {
+  Dataset ds;
+  std::vector<std::string> views;
+  std::vector<Image> images;
+};
+
+// Six textured views with two drops fixed to the lens; the training views and their images.
+Scene drop_scene(const std::string& dir) {
+  restoration::testing_util::make_drop_dataset(dir, 6, [](int w, int h, int i) {
+    return restoration::testing_util::textured_view_with_drops(w, h, Rng(5, 7, uint64_t(i)), {{0.3 * w, 0.4 * h}, {0.7 * w, 0.6 * h}},
+                                                               0.12 * w);
+  });
+  Scene s;
+  s.ds = read_dataset(dir);
+  for (const std::string& v : s.ds.split("train")) {
+    s.views.push_back(v);
+    s.images.push_back(read_image(s.ds.path(ImageKind::kImages, v)));
+  }
+  return s;
+}
+
+LedAdaptOptions small_options() {
+  LedAdaptOptions o;
+  o.layouts = 2;
+  o.iterations = 6;
+  o.batch = 2;
+  o.threads = 1;
+  o.progress = false;
+  return o;
+}
+
+bool same_attention(const LensDetector& a, const LensDetector& b, const Image& view) {
+  return a.attention(view, "view").data == b.attention(view, "view").data;
+}
+
+TEST(LedAdaptationTest, LayoutSpecsFollowTheTrainingRecipe) {
+  for (int k = 0; k < 8; ++k) {
+    const Json s = adapt_layout_spec(k);
+    EXPECT_EQ(s["seed"].get<uint64_t>(), kAdaptSeedBase + uint64_t(k) + 1);
+    EXPECT_EQ(s["style"].get<std::string>(), kAdaptLayouts[k % 4].style);
+    const Json& l = s["effects"]["lens_droplets"];
+    EXPECT_EQ(l["count"].get<int>(), kAdaptLayouts[k % 4].count);
+    EXPECT_DOUBLE_EQ(l["radius_mm"][0].get<double>(), 0.3);
+    EXPECT_DOUBLE_EQ(l["radius_mm"][1].get<double>(), 1.5);
+    EXPECT_DOUBLE_EQ(l["glass_distance_m"].get<double>(), 0.015);
+  }
+}
+
+TEST(LedAdaptationTest, FineTunesACopyDeterministicallyAndReportsIt) {
+  testing::TempDir tmp;
+  const Scene s = drop_scene(tmp / "scene");
+  ASSERT_GE(s.views.size(), 4u);
+  const LensDetector base(tiny_arch(), 3);
+  const std::vector<float> before = base.attention(s.images[0], "view").data;
+  Json report, report2;
+  const LensDetector a = adapt_led(base, s.ds, s.views, s.images, small_options(), report);
+  const LensDetector b = adapt_led(base, s.ds, s.views, s.images, small_options(), report2);
+  // The base network is left as it was; the copy changed; the same inputs give the same network.
+  EXPECT_EQ(base.attention(s.images[0], "view").data, before);
+  EXPECT_FALSE(same_attention(a, base, s.images[0]));
+  EXPECT_TRUE(same_attention(a, b, s.images[0]));
+  EXPECT_EQ(a.peak_rule().has_value(), base.peak_rule().has_value());
+  EXPECT_DOUBLE_EQ(a.threshold(), base.threshold());
+  // The report: both layouts, new drops on the views, what was left out, the fine-tune.
+  ASSERT_EQ(report["layouts"].size(), 2u);
+  double drops = 0;
+  for (const Json& l : report["layouts"]) {
+    const double f = l["drop_fraction"].get<double>();
+    EXPECT_GE(f, 0.0);
+    EXPECT_LE(f, 1.0);
+    drops += f;
+  }
+  EXPECT_GT(drops, 0.0) << "no new drop changed any view";
+  const double ignored = report["ignored_fraction"].get<double>();
+  EXPECT_GE(ignored, 0.0);
+  EXPECT_LE(ignored, 1.0);
+  EXPECT_EQ(report["iterations"].get<int>(), 6);
+  EXPECT_EQ(report["views"].size(), s.views.size());
+  EXPECT_TRUE(std::isfinite(report["loss_last_50"].get<double>()));
+  for (float v : a.attention(s.images[1], "view").data) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(LedAdaptationTest, BadOptionsAndInputsAreInputErrors) {
+  testing::TempDir tmp;
+  const Scene s = drop_scene(tmp / "scene");
+  const LensDetector base(tiny_arch(), 3);
+  Json report;
+  for (auto bad : {+[](LedAdaptOptions& o) { o.layouts = 0; }, +[](LedAdaptOptions& o) { o.iterations = 0; },
+                   +[](LedAdaptOptions& o) { o.learning_rate = 0; }, +[](LedAdaptOptions& o) { o.ignore_level = 0; },
+                   +[](LedAdaptOptions& o) { o.ignore_dilations = -1; }, +[](LedAdaptOptions& o) { o.batch = 0; }}) {
+    LedAdaptOptions o = small_options();
+    bad(o);
+    EXPECT_THROW(adapt_led(base, s.ds, s.views, s.images, o, report), InputError);
+  }
+  // No views, names without images, an image of the wrong size, a view the dataset does not have.
+  EXPECT_THROW(adapt_led(base, s.ds, {}, {}, small_options(), report), InputError);
+  EXPECT_THROW(adapt_led(base, s.ds, s.views, {s.images[0]}, small_options(), report), InputError);
+  std::vector<Image> wrong = s.images;
+  wrong[1] = Image(8, 8, 3);
+  EXPECT_THROW(adapt_led(base, s.ds, s.views, wrong, small_options(), report), InputError);
+  std::vector<std::string> unknown = s.views;
+  unknown[0] = "no_such_view";
+  EXPECT_THROW(adapt_led(base, s.ds, unknown, s.images, small_options(), report), InputError);
+}
+
+TEST(LedAdaptationTest, DetectAdaptsThroughItsHookAndRefusesPerViewAveraging) {
+  testing::TempDir tmp;
+  const Scene s = drop_scene(tmp / "scene");
+  LensDetector(tiny_arch(), 3).save(tmp / "w", Json::object());
+  restoration::DetectDatasetOptions d;
+  d.weights = tmp / "w";
+  int calls = 0;
+  d.adapt = [&](const LensDetector& base, const Dataset& ds, const std::vector<std::string>& views,
+                const std::vector<Image>& images, Json& report) {
+    ++calls;
+    EXPECT_EQ(views, s.views);  // the training views only, in dataset order
+    return adapt_led(base, ds, views, images, small_options(), report);
+  };
+  restoration::detect_dataset(tmp / "scene", tmp / "masks", d);
+  EXPECT_EQ(calls, 1);
+  const Json j = read_json_file((fs::path(tmp / "masks") / restoration::kDetectReportFile).string());
+  EXPECT_EQ(j["adaptation"]["layouts"].size(), 2u);
+  for (const Camera& c : s.ds.cameras) EXPECT_TRUE(fs::exists(fs::path(tmp / "masks") / (c.name + ".png")));
+  d.averaging = restoration::LedAveraging::kPerView;
+  EXPECT_THROW(restoration::detect_dataset(tmp / "scene", tmp / "masks2", d), InputError);
+  EXPECT_FALSE(fs::exists(tmp / "masks2"));
+}
+
+}  // namespace
+}  // namespace weathergs::study
