@@ -5,8 +5,8 @@
 
 #include "apps/command.h"
 #include "apps/resources.h"
-#include "restoration/detect_dataset.h"
 #include "core/parallel.h"
+#include "restoration/detect_dataset.h"
 #include "study/led_adaptation.h"
 
 namespace weathergs::cli {
@@ -96,7 +96,7 @@ Command make(CLI::App& root) {
                 "Also write the soft attention behind each mask as attention/<view>.png (16-bit, value = attention)");
   sub->add_flag("--adapt", a->adapt,
                 "Adapt the network to this scene first: fine-tune a copy on the training views with new lens drops "
-                "rendered over them (about a minute on 2 cores; docs/restoration_led.md, \"Adapted to the scene\")");
+                "rendered over them (~95 s on 2 cores for a quick-profile dataset; docs/restoration_led_adapted.md)");
   sub->add_option("--adapt-iterations", a->adapt_options.iterations, "Fine-tuning iterations of --adapt")->capture_default_str();
   sub->add_option("--adapt-layouts", a->adapt_options.layouts, "Drop layouts rendered over every training view by --adapt")
       ->capture_default_str();

@@ -1,9 +1,9 @@
 // The only translation unit of the LED that includes libtorch (~17 s to compile).
-#include <algorithm>
 #include "restoration/lens_detector.h"
 
 #include <torch/torch.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -372,8 +372,8 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
   std::vector<torch::Tensor> xs, ms;
   examples_to_tensors(examples, impl_->arch, "LED training example ", xs, ms);
   std::vector<torch::Tensor> ws;
+  // Per-pixel loss weights: the drop-size balance, the examples' own weights, or their product.
   const bool weighted = std::any_of(examples.begin(), examples.end(), [](const LedExample& e) { return !e.weight.data.empty(); });
-  const bool balance = o.drop_balance_area > 0 || weighted;
   if (o.drop_balance_area > 0)
     for (const torch::Tensor& m : ms) ws.push_back(drop_balance_weights(m, o.drop_balance_area));
   if (weighted)
@@ -389,6 +389,7 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
       if (ws.size() <= i) ws.push_back(w);
       else ws[i] = ws[i] * w;
     }
+  const bool use_weights = !ws.empty();
   LedNet& net = impl_->net;
   net->train();
   torch::optim::Adam adam(net->parameters(), torch::optim::AdamOptions(o.learning_rate));
@@ -440,12 +441,12 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
       }
       bx.push_back(x);
       bm.push_back(flip ? ms[k].flip({2}) : ms[k]);
-      if (balance) bw.push_back(flip ? ws[k].flip({2}) : ws[k]);
+      if (use_weights) bw.push_back(flip ? ws[k].flip({2}) : ws[k]);
     }
     detail::set_cosine_learning_rate(adam, o.learning_rate, it, o.iterations);
     adam.zero_grad();
     const torch::Tensor loss = attention_loss(net->forward(torch::stack(bx)), torch::stack(bm), o.theta,
-                                              balance ? torch::stack(bw) : torch::Tensor());
+                                              use_weights ? torch::stack(bw) : torch::Tensor());
     loss.backward();
     adam.step();
     const double l = loss.item<double>();

@@ -30,11 +30,7 @@ LedExample lens_view(int w, int h, int layout, int index) {
 }
 
 LedArchitecture tiny_arch(LedViewPooling pooling) {
-  LedArchitecture a;
-  a.width = 32;
-  a.channels = 6;
-  a.steps = 2;
-  a.residual_blocks = 2;
+  LedArchitecture a = testing_util::tiny_arch();
   a.view_pooling = pooling;
   return a;
 }
