@@ -26,7 +26,7 @@ struct LedAdaptOptions {
   // and count of kAdaptLayouts[k % 4] and weather seed kAdaptSeedBase + k + 1.
   int layouts = 4;
   int iterations = 300;
-  double learning_rate = 5e-4;  // a tenth of the training recipe's: a fine-tune, not a new network
+  double learning_rate = 5e-4;  // a quarter of the training recipe's 2e-3: a fine-tune, not a new network
   int batch = 4;
   // The base network's averaged attention at or above this level, dilated ignore_dilations times
   // (3x3 cross), is left out of the loss unless a new drop covers the pixel.
