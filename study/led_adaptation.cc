@@ -6,7 +6,7 @@
 
 #include "core/error.h"
 #include "core/parallel.h"
-#include "core/progress.h"
+#include "core/progress.h"  // ProgressBar, seconds_since
 #include "generator/lens/drops.h"
 #include "generator/lens/lens_render.h"
 #include "generator/weather.h"
@@ -15,10 +15,6 @@
 
 namespace weathergs::study {
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 // Where the base network's averaged map may hide the scene's own drops: m >= level, dilated with a
 // 3x3 cross `dilations` times. 1 = left out of the loss.
