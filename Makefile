@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline clean training-data validation-data models
+.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline clean training-data validation-data adapted-led-rule models
 
 all: build
 
@@ -56,6 +56,14 @@ training-data: build
 VALIDATION_DATA ?= data/validation
 validation-data: build
 	TRAINING_PART=validation bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(VALIDATION_DATA) 12 quick
+
+# The peak rule `detect --adapt` uses, calibrated on the validation scenes' adapted maps
+# (docs/restoration_led_adapted.md, "A rule for adapted maps"; ~40 min on 2 cores; needs
+# validation-data). Writes the LED weights in place (LED_WEIGHTS) with that rule added.
+LED_WEIGHTS ?= models/led/led
+ADAPTED_MAPS ?= data/validation_adapted_maps
+adapted-led-rule: build
+	bash scripts/calibrate-adapted-led.sh $(BUILD)/apps/weathergs $(VALIDATION_DATA) $(ADAPTED_MAPS) $(LED_WEIGHTS)
 
 # Retrains every weight file in models/ from scratch (models/README.md); MODELS_DIR=DIR writes them
 # there instead, leaving the shipped weights alone (e.g. to compare sha256s). The training set's

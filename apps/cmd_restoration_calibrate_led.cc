@@ -13,21 +13,21 @@ namespace {
 
 struct CalibrateLedArgs {
   std::string weights, out;
-  std::vector<std::string> held_out;
-  bool peak = false;
-  std::optional<int> width;
-  std::string command;
+  restoration::RecalibrateLedOptions options;
 };
 
 int run(const CalibrateLedArgs& a) {
   const std::string weights = find_led_weights(a.weights);
-  const restoration::LedCalibration c = restoration::recalibrate_led(weights, a.held_out, a.out, a.peak, a.command, a.width);
-  std::printf("calibrated threshold %.3f for %d dilations: mean IoU %.3f over held-out datasets with drops\n", c.threshold,
-              c.dilate_iterations, c.mean_iou);
-  print_led_scores(c.scores);
+  const restoration::LedCalibration c = restoration::recalibrate_led(weights, a.out, a.options);
+  if (!a.options.adapted) {
+    std::printf("calibrated threshold %.3f for %d dilations: mean IoU %.3f, precision %.3f over held-out datasets with drops\n",
+                c.threshold, c.dilate_iterations, c.mean_iou, c.mean_precision);
+    print_led_scores(c.scores);
+  }
   if (c.peak) {
-    std::printf("calibrated peak rule (low %.2f, seed %.2f, fraction %.2f): mean IoU %.3f\n", c.peak->low, c.peak->seed,
-                c.peak->fraction, c.peak_mean_iou);
+    std::printf("calibrated %speak rule (low %.2f, seed %.2f, fraction %.2f): mean IoU %.3f, precision %.3f\n",
+                a.options.adapted ? "adapted " : "", c.peak->low, c.peak->seed, c.peak->fraction, c.peak_mean_iou,
+                c.peak_mean_precision);
     print_led_scores(c.peak_scores);
   }
   std::printf("wrote %s.json and %s.bin (the network of %s, recalibrated)\n", a.out.c_str(), a.out.c_str(), weights.c_str());
@@ -43,13 +43,21 @@ Command make(CLI::App& root) {
       "(docs/restoration_led.md).");
   sub->add_option("--weights", a->weights,
                   "Weights stem to calibrate; default $WEATHERGS_LED_WEIGHTS, else the installed models/led/led");
-  sub->add_option("--held-out", a->held_out, "Held-out datasets with masks/lens (never trained on)")->required();
+  sub->add_option("--held-out", a->options.held_out, "Held-out datasets with masks/lens (never trained on): the network runs on them");
+  sub->add_option("--maps", a->options.maps,
+                  "Instead of --held-out: outputs of `weathergs detect --save-attention` made with these weights on held-out "
+                  "datasets (their detect.json names the dataset)");
   sub->add_option("--out", a->out, "Output weights stem: writes <stem>.json and <stem>.bin")->required();
-  sub->add_flag("--peak", a->peak, "Also calibrate the peak-relative rule and store it (detect's default rule then)");
-  sub->add_option("--width", a->width,
+  sub->add_flag("--peak", a->options.search_peak, "Also calibrate the peak-relative rule and store it (detect's default rule then)");
+  sub->add_flag("--adapted", a->options.adapted,
+                "The --maps were made with `detect --adapt`: calibrate only the rule `detect --adapt` uses "
+                "(adapted_peak_rule; needs --peak; docs/restoration_led_adapted.md)");
+  sub->add_option("--min-precision", a->options.min_precision,
+                  "Only rules whose mean held-out precision reaches this (0..1; default: no bound, the highest mean IoU)");
+  sub->add_option("--width", a->options.width,
                   "Run the same network at this internal width from now on (16..2048 px; default: the weights' own)");
   return {sub, [a, sub] {
-            a->command = recorded_command("calibrate-led", *sub);
+            a->options.command = recorded_command("calibrate-led", *sub);
             return run(*a);
           }};
 }

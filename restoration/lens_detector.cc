@@ -277,6 +277,7 @@ struct LensDetector::Impl {
   double threshold = 0.5;
   int dilate_iterations = kReleasedCodeDilations;
   std::optional<LedPeakRule> peak_rule;
+  std::optional<LedPeakRule> adapted_peak_rule;
   Json metadata = Json::object();
 };
 
@@ -305,6 +306,7 @@ LensDetector LensDetector::clone() const {
   c.impl_->threshold = impl_->threshold;
   c.impl_->dilate_iterations = impl_->dilate_iterations;
   c.impl_->peak_rule = impl_->peak_rule;
+  c.impl_->adapted_peak_rule = impl_->adapted_peak_rule;
   c.impl_->metadata = impl_->metadata;
   return c;
 }
@@ -333,6 +335,11 @@ void LensDetector::set_peak_rule(const std::optional<LedPeakRule>& rule) {
   if (rule) rule->validate();
   impl_->peak_rule = rule;
 }
+const std::optional<LedPeakRule>& LensDetector::adapted_peak_rule() const { return impl_->adapted_peak_rule; }
+void LensDetector::set_adapted_peak_rule(const std::optional<LedPeakRule>& rule) {
+  if (rule) rule->validate();
+  impl_->adapted_peak_rule = rule;
+}
 const Json& LensDetector::metadata() const { return impl_->metadata; }
 
 int64_t LensDetector::parameter_count() const {
@@ -348,6 +355,8 @@ void LensDetector::save(const std::string& stem, const Json& extra) const {
   j["dilate_iterations"] = impl_->dilate_iterations;
   if (impl_->peak_rule) j["peak_rule"] = impl_->peak_rule->to_json();
   else j.erase("peak_rule");
+  if (impl_->adapted_peak_rule) j["adapted_peak_rule"] = impl_->adapted_peak_rule->to_json();
+  else j.erase("adapted_peak_rule");
   j["parameters"] = parameter_count();
   detail::save_weights(*impl_->net, stem, j);  // + the tensor table, the blob and its sha256
 }
@@ -360,6 +369,7 @@ LensDetector LensDetector::load(const std::string& stem) {
   d.impl_->threshold = r.get_number("threshold", 1e-6, 1 - 1e-6);
   d.impl_->dilate_iterations = int(r.get_number_or("dilate_iterations", kReleasedCodeDilations, 0, kMaxDilations));
   if (r.has("peak_rule")) d.impl_->peak_rule = LedPeakRule::from_json(r.child("peak_rule"));
+  if (r.has("adapted_peak_rule")) d.impl_->adapted_peak_rule = LedPeakRule::from_json(r.child("adapted_peak_rule"));
   d.impl_->metadata = r.value();
   return d;
 }

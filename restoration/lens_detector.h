@@ -141,6 +141,11 @@ class LensDetector {
   // `weathergs detect` uses it by default when present (docs/restoration_led.md).
   const std::optional<LedPeakRule>& peak_rule() const;
   void set_peak_rule(const std::optional<LedPeakRule>& rule);
+  // The peak rule calibrated on maps of this network adapted to each held-out scene (`adapted_peak_rule`
+  // in <stem>.json; `calibrate-led --maps ... --adapted`), if any: `detect --adapt` uses it instead of
+  // peak_rule(), since the adapted network's maps peak differently (docs/restoration_led_adapted.md).
+  const std::optional<LedPeakRule>& adapted_peak_rule() const;
+  void set_adapted_peak_rule(const std::optional<LedPeakRule>& rule);
   const Json& metadata() const;  // the JSON read by load (empty for a fresh network)
 
   // Trains in place on `examples` (resized to the internal width once, up front). Deterministic for a

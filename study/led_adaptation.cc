@@ -142,6 +142,9 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   t.threads = o.threads;
   t.progress = o.progress;
   const restoration::LedTrainRecord rec = adapted.train(examples, t);
+  // The adapted network's maps peak differently from the base's: detect cuts them with the rule
+  // calibrated on adapted maps when the weights store one (calibrate-led --adapted).
+  if (base.adapted_peak_rule()) adapted.set_peak_rule(base.adapted_peak_rule());
   report = Json{{"method", "fine-tune on the training views with new lens drops (docs/restoration_led.md, \"Adapted to the scene\")"},
                 {"views", views},
                 {"layouts", layouts},
@@ -156,6 +159,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
                 {"loss_first_50", rec.loss_curve.empty() ? 0.0 : rec.loss_curve.front()},
                 {"loss_last_50", rec.loss_curve.empty() ? 0.0 : rec.loss_curve.back()},
                 {"training_seconds", rec.seconds},
+                {"peak_rule", base.adapted_peak_rule() ? "adapted_peak_rule" : "peak_rule"},
                 {"seconds", seconds_since(start)}};
   return adapted;
 }

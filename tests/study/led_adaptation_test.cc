@@ -6,7 +6,9 @@
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/rng.h"
+#include "core/json_reader.h"
 #include "restoration/detect_dataset.h"
+#include "restoration/led_training.h"
 #include "study/led_adaptation.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
@@ -145,6 +147,69 @@ TEST(LedAdaptationTest, DetectAdaptsThroughItsHookAndRefusesPerViewAveraging) {
   d.averaging = restoration::LedAveraging::kPerView;
   EXPECT_THROW(restoration::detect_dataset(tmp / "scene", tmp / "masks2", d), InputError);
   EXPECT_FALSE(fs::exists(tmp / "masks2"));
+}
+
+// Weights with a rule calibrated on adapted maps (calibrate-led --maps ... --adapted): detect --adapt
+// cuts the adapted network's map with it, detect without --adapt with the weights' own rule; and
+// calibrate-led --adapted reads the maps detect --adapt --save-attention wrote.
+TEST(LedAdaptationTest, DetectAdaptUsesTheAdaptedRuleCalibratedOnAdaptedMaps) {
+  testing::TempDir tmp;
+  const Scene s = drop_scene(tmp / "scene");
+  LensDetector w(tiny_arch(), 3);
+  w.set_peak_rule(restoration::LedPeakRule{0.3, 0.3, 0.7});
+  w.save(tmp / "w", Json::object());
+  restoration::DetectDatasetOptions d;
+  d.weights = tmp / "w";
+  d.save_attention = true;
+  d.adapt = [&](const LensDetector& base, const Dataset& ds, const std::vector<std::string>& views,
+                const std::vector<Image>& images, Json& report) {
+    return adapt_led(base, ds, views, images, small_options(), report);
+  };
+  restoration::detect_dataset(tmp / "scene", tmp / "adapted", d);
+  Json j = read_json_file(tmp / "adapted/detect.json");
+  EXPECT_EQ(j["adaptation"]["peak_rule"], "peak_rule");  // no adapted rule yet: the weights' own
+  EXPECT_DOUBLE_EQ(j["peak_rule"]["fraction"].get<double>(), 0.7);
+
+  restoration::RecalibrateLedOptions c;
+  c.maps = {tmp / "adapted"};
+  c.adapted = true;
+  c.search_peak = true;
+  c.command = "test";
+  const restoration::LedCalibration cal = restoration::recalibrate_led(tmp / "w", tmp / "w2", c);
+  ASSERT_TRUE(cal.peak);
+  const LensDetector w2 = LensDetector::load(tmp / "w2");
+  ASSERT_TRUE(w2.adapted_peak_rule());
+  EXPECT_DOUBLE_EQ(w2.adapted_peak_rule()->fraction, cal.peak->fraction);
+  ASSERT_TRUE(w2.peak_rule());  // the plain rule is kept
+  EXPECT_DOUBLE_EQ(w2.peak_rule()->fraction, 0.7);
+  const Json w2j = read_json_file(tmp / "w2.json");
+  EXPECT_EQ(w2j["adapted_calibration"]["held_out"], Json::array({"scene"}));
+  EXPECT_EQ(w2j["adapted_calibration"]["adaptations"][0]["iterations"].get<int>(), 6);
+  EXPECT_FALSE(w2j.contains("calibration"));  // --adapted writes only its own record
+  // Non-adapted maps are refused for the adapted rule.
+  restoration::DetectDatasetOptions plain = d;
+  plain.adapt = nullptr;
+  restoration::detect_dataset(tmp / "scene", tmp / "plain", plain);
+  c.maps = {tmp / "plain"};
+  EXPECT_THROW(restoration::recalibrate_led(tmp / "w", tmp / "w3", c), InputError);
+  EXPECT_FALSE(fs::exists(tmp / "w3.json"));
+
+  // An adapted rule that differs from the plain one, to tell which one detect used.
+  LensDetector w4 = LensDetector::load(tmp / "w");
+  w4.set_adapted_peak_rule(restoration::LedPeakRule{0.4, 0.5, 0.85});
+  w4.save(tmp / "w4", Json::object());
+  d.weights = plain.weights = tmp / "w4";
+  restoration::detect_dataset(tmp / "scene", tmp / "adapted4", d);
+  j = read_json_file(tmp / "adapted4/detect.json");
+  EXPECT_EQ(j["adaptation"]["peak_rule"], "adapted_peak_rule");
+  EXPECT_DOUBLE_EQ(j["peak_rule"]["fraction"].get<double>(), 0.85);
+  EXPECT_DOUBLE_EQ(j["peak_rule"]["low"].get<double>(), 0.4);
+  restoration::detect_dataset(tmp / "scene", tmp / "plain4", plain);
+  EXPECT_DOUBLE_EQ(read_json_file(tmp / "plain4/detect.json")["peak_rule"]["fraction"].get<double>(), 0.7);
+  // An explicit --peak still overrides both.
+  d.mask.peak = restoration::LedPeakRule{0.2, 0.2, 0.5};
+  restoration::detect_dataset(tmp / "scene", tmp / "override", d);
+  EXPECT_DOUBLE_EQ(read_json_file(tmp / "override/detect.json")["peak_rule"]["fraction"].get<double>(), 0.5);
 }
 
 }  // namespace
