@@ -51,7 +51,8 @@ training-data: build
 	$(MAKE_TRAINING_DATA)
 
 # The LED's validation scenes station and village (docs/restoration_led_scenes.md, "A third draw"):
-# no network trains or is calibrated on them; benchmarks/restoration_led_validation.py scores and
+# no network trains on them (only the adapted peak rule is calibrated on them: adapted-led-rule, below);
+# benchmarks/restoration_led_validation.py scores and
 # compares LED weights on them. An OUT of their own.
 VALIDATION_DATA ?= data/validation
 validation-data: build

@@ -12,6 +12,7 @@ masks/lens (the `perceptible` truth) and against the drops' lens coverage >= 0.1
 reports them in detect.json), per dataset, then the mean and standard deviation over the seeds.
 
 Usage: restoration_led_layouts.py WEATHERGS OUT [--seeds 101-108] [--weights STEM] [--suite data/suite_paper] [--adapt]
+                                  [--save-attention]
   Run in the repository root (the suite and scenes/ are read from there). Datasets and masks are
   cached in OUT. Seed 7 is the benchmark's own draw.
 """
@@ -63,6 +64,8 @@ def main():
     p.add_argument("--suite", default="data/suite_paper", help="where the benchmark's rain variants are")
     p.add_argument("--adapt", action="store_true",
                    help="detect with --adapt (docs/restoration_led.md, \"Adapted to the scene\"); masks go to OUT/masks_adapt")
+    p.add_argument("--save-attention", action="store_true",
+                   help="also keep each map behind the masks (detect --save-attention), e.g. to read another rule on them")
     args = p.parse_args()
     os.makedirs(os.path.join(args.out, "specs"), exist_ok=True)
     print("| scene | seed | vs masks/lens: IoU / precision | vs coverage >= 0.1: IoU / precision |")
@@ -84,7 +87,8 @@ def main():
                                check=True, stdout=subprocess.DEVNULL)
             m = os.path.join(args.out, "masks_adapt" if args.adapt else "masks", f"{scene}_s{seed}")
             subprocess.run([args.weathergs, "--quiet", "detect", "--data", d, "--out", m]
-                           + (["--weights", args.weights] if args.weights else []) + (["--adapt"] if args.adapt else []),
+                           + (["--weights", args.weights] if args.weights else []) + (["--adapt"] if args.adapt else [])
+                           + (["--save-attention"] if args.save_attention else []),
                            check=True, stdout=subprocess.DEVNULL)
             report = json.load(open(os.path.join(m, "detect.json")))
             g, c = report["ground_truth"], report["ground_truth_coverage"]  # detect scores both truths

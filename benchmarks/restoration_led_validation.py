@@ -2,8 +2,10 @@
 """Scores LED weights on the validation scenes station and village (issue 11; docs/restoration_led_scenes.md,
 "A third draw"), and with --against compares two draws of the LED recipe the way the shipped one was chosen.
 
-The validation scenes are no benchmark scene, and no network is trained or calibrated on them, so they can
-choose between draws of the recipe without choosing on the benchmark. Make them once (an OUT of their own):
+The validation scenes are no benchmark scene, and no network is trained on them, so they can choose between
+draws of the recipe without choosing on the benchmark. Since 2026-11-28 (late night) the rule `detect --adapt`
+cuts its maps with is calibrated on them (`make adapted-led-rule`), so an --adapt reading here is in-sample for
+that rule. Make them once (an OUT of their own):
 
     TRAINING_PART=validation scripts/make-training-data.sh build/apps/weathergs data/validation 12 quick
 
