@@ -194,10 +194,6 @@ void apply_calibration(LensDetector& led, const LedCalibration& c) {
   led.set_peak_rule(c.peak);
 }
 
-}  // namespace
-
-namespace {
-
 std::string objective_text(const std::optional<double>& min_precision) {
   std::string t = ", maximizing the mean IoU of the averaged mask over held-out datasets with drops";
   if (min_precision) {
@@ -270,7 +266,8 @@ LedCalibration recalibrate_led(const std::string& weights_stem, const std::strin
       if (m.weights_sha256 != sha)
         throw InputError(dir, "was made by other weights (sha256 " + m.weights_sha256.substr(0, 8) + "..., " + weights_stem +
                                   " has " + sha.substr(0, 8) + "...): run detect again with --weights " + weights_stem);
-      if (o.adapted != !m.adaptation.is_null())
+      const bool made_adapted = !m.adaptation.is_null();
+      if (o.adapted != made_adapted)
         throw InputError(dir, o.adapted ? "was made without --adapt: --adapted calibrates on maps of `detect --adapt`"
                                         : "was made with --adapt: calibrate the adapted rule with --adapted");
       if (o.adapted)
@@ -313,6 +310,16 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
   const std::set<std::string> train_set(train_datasets.begin(), train_datasets.end());
   for (const std::string& h : held_out)
     if (train_set.count(h)) throw InputError(h, "is both a training and a held-out dataset");
+  // The calibration needs drops: fail before the training, not after it.
+  if (!held_out.empty()) {
+    bool drops = false;
+    for (size_t i = 0; i < held_out.size() && !drops; ++i) {
+      const Dataset ds = read_dataset(held_out[i]);
+      for (const std::string& v : ds.split("train"))
+        for (float x : lens_mask_or_zero(ds, ds.camera(v)).data) drops |= x > 0.5f;
+    }
+    if (!drops) throw InputError("train-led --held-out", "none of the held-out datasets has drops (masks/lens): nothing to calibrate on");
+  }
   TrainLedResult result;
   std::vector<LedExample> examples;
   for (size_t g = 0; g < train_datasets.size(); ++g)

@@ -135,6 +135,14 @@ TEST(LedCalibrationTest, CalibrateLedReadsSavedMapsOfTheSameWeights) {
       "--maps " + (tmp / "nothing"),                                        // not a detect output
       "--maps " + (tmp / "maps") + " --peak --min-precision 0.01",          // the untrained network's masks are empty
   };
+  // train-led calibrating on held-out datasets without drops fails before it trains: exit 2 at once.
+  testing::SceneOptions so;
+  so.views = 3;
+  testing::make_clean_dataset(tmp / "clear", so);
+  EXPECT_EQ(run_cli("train-led --data " + held + " --held-out " + (tmp / "clear") + " --out " + (tmp / "t") + " --iterations 100000",
+                    tmp / "t.log"), 2) << read_file(tmp / "t.log");
+  EXPECT_NE(read_file(tmp / "t.log").find("nothing to calibrate on"), std::string::npos) << read_file(tmp / "t.log");
+  EXPECT_FALSE(fs::exists(tmp / "t.json"));
   for (const std::string& args : bad) {
     EXPECT_EQ(run_cli("calibrate-led --weights " + w + " " + args + " --out " + (tmp / "bad"), tmp / "b.log"), 2)
         << args << "\n" << read_file(tmp / "b.log");
