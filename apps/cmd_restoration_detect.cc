@@ -45,9 +45,7 @@ int run(DetectArgs& a) {
   a.options.mask.band_hi = a.band[1];
   if (a.adapt) {
     a.adapt_options.validate();
-    a.options.adapt = [opts = a.adapt_options](const restoration::LensDetector& base, const Dataset& ds,
-                                               const std::vector<std::string>& views, const std::vector<Image>& images,
-                                               Json& report) { return study::adapt_led(base, ds, views, images, opts, report); };
+    a.options.adapt = study::led_adaptation_hook(a.adapt_options);
   }
   const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
   double mean = 0;

@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/error.h"
 #include "core/image.h"
 #include "core/parallel.h"
 #include "core/progress.h"
@@ -76,6 +77,16 @@ void WeatherRunOptions::validate() const {
     throw InputError("mask_threshold", "must be in (0, 1], got " + std::to_string(mask_threshold));
 }
 
+Eigen::Vector3f mean_sky_radiance(const std::vector<std::array<double, 3>>& per_view) {
+  WGS_CHECK(!per_view.empty());
+  std::array<double, 3> s{0, 0, 0};
+  for (const auto& v : per_view)
+    for (int c = 0; c < 3; ++c) s[size_t(c)] += v[size_t(c)];
+  Eigen::Vector3f sky;
+  for (int c = 0; c < 3; ++c) sky[c] = float(s[size_t(c)] / double(per_view.size()));
+  return sky;
+}
+
 std::array<double, 3> estimate_sky_radiance(const Image& img) {
   const size_t n = img.num_pixels();
   std::vector<std::pair<double, size_t>> lum(n);
@@ -127,13 +138,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
     const Image img = to_linear(to_rgb(read_image(clean_image_path(clean, cameras[size_t(i)].name))));
     sky_per_view[size_t(i)] = estimate_sky_radiance(img);
   });
-  Eigen::Vector3f sky = Eigen::Vector3f::Zero();
-  {
-    std::array<double, 3> s{0, 0, 0};
-    for (const auto& v : sky_per_view)
-      for (int c = 0; c < 3; ++c) s[size_t(c)] += v[size_t(c)];
-    for (int c = 0; c < 3; ++c) sky[c] = float(s[size_t(c)] / double(cameras.size()));
-  }
+  const Eigen::Vector3f sky = mean_sky_radiance(sky_per_view);
   const Eigen::Vector3f airlight = spec.fog && spec.fog->airlight ? *spec.fog->airlight : sky;
 
   // The lens glass is placed against the first camera in cameras.json order, whatever the view order.

@@ -61,5 +61,7 @@ Json run_weather(const std::string& clean_dataset_dir, const JsonReader& spec, c
 // Sky radiance estimate of a clean linear RGB image: the mean of its brightest 0.5% pixels (by
 // luminance). run_weather averages it over all views in cameras.json order.
 std::array<double, 3> estimate_sky_radiance(const Image& clean_linear);
+// The dataset-wide sky radiance: the mean of the views' estimates, summed in the given order.
+Eigen::Vector3f mean_sky_radiance(const std::vector<std::array<double, 3>>& per_view);
 
 }  // namespace weathergs

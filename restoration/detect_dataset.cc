@@ -191,7 +191,6 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   const auto start = std::chrono::steady_clock::now();
   const Dataset ds = read_dataset(dataset);
   LensDetector led = LensDetector::load(o.weights);
-  o.mask.resolved(led);  // a bad override fails now, not after an adaptation
   if (o.adapt && o.averaging != LedAveraging::kTrainViews)
     throw InputError("detect --adapt", "adapts to drops fixed to the lens: it needs the train-views averaging, not --per-view");
   auto input_path = [&](const std::string& view) {
@@ -220,7 +219,9 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   }
   Json adaptation;
   if (o.adapt) led = o.adapt(led, ds, names, images, adaptation);
-  const LedMaskOptions mask_options = o.mask.resolved(led);  // after adapting: it may bring its own rule
+  // After adapting, which may bring its own rule (the overrides were validated above, the weights' own
+  // values when they were loaded).
+  const LedMaskOptions mask_options = o.mask.resolved(led);
   const auto net_start = std::chrono::steady_clock::now();
   std::vector<Image> attention;
   {

@@ -26,6 +26,14 @@ Image lens_mask_or_zero(const Dataset& ds, const Camera& c) {
 
 std::string dataset_name(const std::string& dir) { return fs::path(dir).lexically_normal().filename().string(); }
 
+// The truth of `views` (lens_mask_or_zero) into m.truth, and whether any of it marks a drop.
+void read_truth(const Dataset& ds, const std::vector<std::string>& views, LedHeldOutMap& m) {
+  for (const std::string& v : views) {
+    m.truth.push_back(lens_mask_or_zero(ds, ds.camera(v)));
+    for (float x : m.truth.back().data) m.has_drops |= x > 0.5f;
+  }
+}
+
 }  // namespace
 
 std::vector<LedExample> read_led_examples(const std::string& dataset) {
@@ -44,11 +52,8 @@ LedHeldOutMap held_out_map(const LensDetector& led, const std::string& dataset) 
   const Dataset ds = read_dataset(dataset);
   LedHeldOutMap m{dataset_name(dataset), {}, {}, false};
   std::vector<Image> views;
-  for (const std::string& v : ds.split("train")) {
-    views.push_back(read_image(ds.path(ImageKind::kImages, v)));
-    m.truth.push_back(lens_mask_or_zero(ds, ds.camera(v)));
-    for (float x : m.truth.back().data) m.has_drops |= x > 0.5f;
-  }
+  for (const std::string& v : ds.split("train")) views.push_back(read_image(ds.path(ImageKind::kImages, v)));
+  read_truth(ds, ds.split("train"), m);
   m.attention = mean_attention(led, views, dataset);
   return m;
 }
@@ -75,10 +80,7 @@ SavedLedMap read_saved_led_map(const std::string& detect_dir) {
   out.map.name = dataset_name(dataset);
   if (views != ds.split("train"))
     throw InputError(r.where("averaged_views"), "differs from the training split of " + dataset + ": the dataset changed since");
-  for (const std::string& v : views) {
-    out.map.truth.push_back(lens_mask_or_zero(ds, ds.camera(v)));
-    for (float x : out.map.truth.back().data) out.map.has_drops |= x > 0.5f;
-  }
+  read_truth(ds, views, out.map);
   // Every view's saved map is the same averaged one in train-views mode: the first stands for all.
   const std::string map_path = (fs::path(detect_dir) / j["attention"].get<std::string>() / (views[0] + layout::kImageExt)).string();
   out.map.attention = read_image(map_path);  // 16-bit PNG: the value is the attention
@@ -315,8 +317,9 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
     bool drops = false;
     for (size_t i = 0; i < held_out.size() && !drops; ++i) {
       const Dataset ds = read_dataset(held_out[i]);
-      for (const std::string& v : ds.split("train"))
-        for (float x : lens_mask_or_zero(ds, ds.camera(v)).data) drops |= x > 0.5f;
+      LedHeldOutMap m;
+      read_truth(ds, ds.split("train"), m);
+      drops = m.has_drops;
     }
     if (!drops) throw InputError("train-led --held-out", "none of the held-out datasets has drops (masks/lens): nothing to calibrate on");
   }

@@ -86,13 +86,9 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
 
   // The sky radiance as `weathergs weather` estimates it over these views (the physical style's
   // environment light of the drops).
-  std::array<double, 3> sky_sum{0, 0, 0};
   std::vector<std::array<double, 3>> sky_per_view(views.size());
   parallel_for(0, int64_t(views.size()), [&](int64_t i) { sky_per_view[size_t(i)] = estimate_sky_radiance(linear[size_t(i)]); });
-  for (const auto& s : sky_per_view)
-    for (int c = 0; c < 3; ++c) sky_sum[size_t(c)] += s[size_t(c)];
-  const Eigen::Vector3f sky(float(sky_sum[0] / double(views.size())), float(sky_sum[1] / double(views.size())),
-                            float(sky_sum[2] / double(views.size())));
+  const Eigen::Vector3f sky = mean_sky_radiance(sky_per_view);
 
   // New drops over every view, layout after layout; the example order is layout-major, view order.
   std::vector<restoration::LedExample> examples(size_t(o.layouts) * views.size());
@@ -162,6 +158,11 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
                 {"peak_rule", base.adapted_peak_rule() ? "adapted_peak_rule" : "peak_rule"},
                 {"seconds", seconds_since(start)}};
   return adapted;
+}
+
+restoration::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options) {
+  return [options](const restoration::LensDetector& base, const Dataset& dataset, const std::vector<std::string>& views,
+                   const std::vector<Image>& images, Json& report) { return adapt_led(base, dataset, views, images, options, report); };
 }
 
 }  // namespace weathergs::study

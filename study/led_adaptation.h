@@ -16,6 +16,7 @@
 #include "core/dataset.h"
 #include "core/image.h"
 #include "core/json_reader.h"
+#include "restoration/detect_dataset.h"
 #include "restoration/lens_detector.h"
 
 namespace weathergs::study {
@@ -56,5 +57,9 @@ Json adapt_layout_spec(int k);
 restoration::LensDetector adapt_led(const restoration::LensDetector& base, const Dataset& dataset,
                                     const std::vector<std::string>& views, const std::vector<Image>& images,
                                     const LedAdaptOptions& options, Json& report);
+
+// adapt_led with `options` as restoration::detect_dataset's adapt hook (`detect --adapt`,
+// `reconstruct --led-adapt`).
+restoration::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options);
 
 }  // namespace weathergs::study

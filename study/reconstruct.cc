@@ -137,9 +137,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     d.mask = o.led_mask;
     if (r.led_per_view) d.averaging = restoration::LedAveraging::kPerView;
     if (o.led_adapt && !r.led_per_view)
-      d.adapt = [opts = *o.led_adapt](const restoration::LensDetector& base, const Dataset& dataset,
-                                      const std::vector<std::string>& views, const std::vector<Image>& images,
-                                      Json& report) { return adapt_led(base, dataset, views, images, opts, report); };
+      d.adapt = led_adaptation_hook(*o.led_adapt);
     restoration::detect_dataset(o.dataset, (run / kDetectedDir).string(), d);
   }
 
