@@ -185,6 +185,26 @@ Image mean_attention(const LensDetector& led, const std::vector<Image>& views, c
   return average(attention_in_batches(led, views, where, pooled_batch(led, batch, views.size(), false), nullptr));
 }
 
+Json detect_settings_json(const std::string& weights_sha256, const DetectDatasetOptions& o, const LedMaskOptions& m) {
+  WGS_CHECK(m.rule && m.threshold && m.peak && m.dilate_iterations);  // resolved options only
+  return Json{{"weights_sha256", weights_sha256},
+              {"images", o.images_dir.empty() ? std::string(layout::kImagesDir) : fs::absolute(o.images_dir).lexically_normal().string()},
+              {"averaging", to_string(o.averaging)},
+              {"rule", to_string(*m.rule)},
+              {"threshold", *m.rule == LedThresholdRule::kAbove ? Json(*m.threshold) : Json()},
+              {"band", *m.rule == LedThresholdRule::kBand ? Json{m.band_lo, m.band_hi} : Json()},
+              {"peak_rule", *m.rule == LedThresholdRule::kPeak ? m.peak->to_json() : Json()},
+              {"dilate_iterations", *m.dilate_iterations}};
+}
+
+std::string detect_settings_mismatch(const Json& report, const Json& expected) {
+  for (const auto& [key, value] : expected.items()) {
+    const Json held = report.contains(key) ? report[key] : Json();
+    if (held != value) return key + ": holds " + held.dump() + ", asked for " + value.dump();
+  }
+  return "";
+}
+
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& o) {
   o.mask.validate();
   if (o.batch < 1 || o.batch > 64) throw InputError("detect batch", "expected 1..64, got " + std::to_string(o.batch));
@@ -283,26 +303,19 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
     coverage_json["threshold"] = *coverage_threshold;
   }
   report.seconds = seconds_since(start);
-  const Json j{{"format", "weathergs-detect"},
-               {"version", 1},
-               {"dataset", fs::absolute(dataset).lexically_normal().string()},
-               {"images", o.images_dir.empty() ? std::string(layout::kImagesDir) : fs::absolute(o.images_dir).lexically_normal().string()},
-               {"weights", fs::absolute(o.weights + ".json").lexically_normal().string()},
-               {"weights_sha256", led.metadata().value("weights_sha256", "")},
-               {"adaptation", adaptation},
-               {"averaging", to_string(o.averaging)},
-               {"averaged_views", o.averaging == LedAveraging::kTrainViews ? Json(names) : Json()},
-               {"rule", to_string(*mask_options.rule)},
-               {"threshold", *mask_options.rule == LedThresholdRule::kAbove ? Json(*mask_options.threshold) : Json()},
-               {"band", *mask_options.rule == LedThresholdRule::kBand ? Json{o.mask.band_lo, o.mask.band_hi} : Json()},
-               {"peak_rule", *mask_options.rule == LedThresholdRule::kPeak ? mask_options.peak->to_json() : Json()},
-               {"dilate_iterations", *mask_options.dilate_iterations},
-               {"attention", o.save_attention ? Json(kDetectAttentionDir) : Json()},
-               {"ground_truth", gt_json},
-               {"ground_truth_coverage", coverage_json},
-               {"seconds", report.seconds},
-               {"seconds_per_view", report.seconds_per_view},
-               {"views", views}};
+  Json j{{"format", "weathergs-detect"},
+         {"version", 1},
+         {"dataset", fs::absolute(dataset).lexically_normal().string()},
+         {"weights", fs::absolute(o.weights + ".json").lexically_normal().string()},
+         {"adaptation", adaptation},
+         {"averaged_views", o.averaging == LedAveraging::kTrainViews ? Json(names) : Json()},
+         {"attention", o.save_attention ? Json(kDetectAttentionDir) : Json()},
+         {"ground_truth", gt_json},
+         {"ground_truth_coverage", coverage_json},
+         {"seconds", report.seconds},
+         {"seconds_per_view", report.seconds_per_view},
+         {"views", views}};
+  j.update(detect_settings_json(led.metadata().value("weights_sha256", ""), o, mask_options));
   write_file_atomic((fs::path(dir.path()) / kDetectReportFile).string(), j.dump(2) + "\n");
   dir.commit();
   return report;

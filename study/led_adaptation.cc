@@ -138,26 +138,29 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   t.threads = o.threads;
   t.progress = o.progress;
   const restoration::LedTrainRecord rec = adapted.train(examples, t);
-  // The adapted network's maps peak differently from the base's: detect cuts them with the rule
-  // calibrated on adapted maps when the weights store one (calibrate-led --adapted).
-  if (base.adapted_peak_rule()) adapted.set_peak_rule(base.adapted_peak_rule());
+  use_adapted_peak_rule(adapted);
   report = Json{{"method", "fine-tune on the training views with new lens drops (docs/restoration_led.md, \"Adapted to the scene\")"},
                 {"views", views},
                 {"layouts", layouts},
-                {"iterations", o.iterations},
-                {"batch", o.batch},
-                {"learning_rate", o.learning_rate},
-                {"seed", o.seed},
                 {"threads", o.threads > 0 ? o.threads : num_threads()},
-                {"ignore_level", o.ignore_level},
-                {"ignore_dilations", o.ignore_dilations},
                 {"ignored_fraction", ignored},
                 {"loss_first_50", rec.loss_curve.empty() ? 0.0 : rec.loss_curve.front()},
                 {"loss_last_50", rec.loss_curve.empty() ? 0.0 : rec.loss_curve.back()},
                 {"training_seconds", rec.seconds},
                 {"peak_rule", base.adapted_peak_rule() ? "adapted_peak_rule" : "peak_rule"},
                 {"seconds", seconds_since(start)}};
+  report.update(adaptation_settings_json(o));
   return adapted;
+}
+
+void use_adapted_peak_rule(restoration::LensDetector& led) {
+  if (led.adapted_peak_rule()) led.set_peak_rule(led.adapted_peak_rule());
+}
+
+Json adaptation_settings_json(const LedAdaptOptions& o) {
+  return Json{{"layout_count", o.layouts},     {"iterations", o.iterations},     {"batch", o.batch},
+              {"learning_rate", o.learning_rate}, {"seed", o.seed},           {"ignore_level", o.ignore_level},
+              {"ignore_dilations", o.ignore_dilations}};
 }
 
 restoration::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options) {

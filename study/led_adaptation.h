@@ -58,6 +58,16 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
                                     const std::vector<std::string>& views, const std::vector<Image>& images,
                                     const LedAdaptOptions& options, Json& report);
 
+// The adapted network's maps peak differently from the base's: detect cuts them with the rule the
+// weights store for adapted maps (`adapted_peak_rule`, calibrate-led --adapted) when they have one.
+// Sets `led`'s peak rule to it; leaves `led` as it is otherwise.
+void use_adapted_peak_rule(restoration::LensDetector& led);
+
+// The options that decide the adapted network, as adapt_led's report holds them (the threads are not
+// among them: they change only the last bits). A run that resumes compares them with
+// restoration::detect_settings_mismatch (study/reconstruct).
+Json adaptation_settings_json(const LedAdaptOptions& options);
+
 // adapt_led with `options` as restoration::detect_dataset's adapt hook (`detect --adapt`,
 // `reconstruct --led-adapt`).
 restoration::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options);

@@ -10,7 +10,9 @@
 #include "core/dataset_layout.h"
 #include "core/error.h"
 #include "core/json_reader.h"
+#include "restoration/detect_dataset.h"
 #include "restoration/filter_dataset.h"
+#include "restoration/lens_detector.h"
 
 namespace weathergs::study {
 
@@ -29,6 +31,27 @@ constexpr const char* kDetectedDir = "detected";
 bool has_points(const std::string& model_dir) {
   const fs::path p = fs::path(model_dir) / "points3D.txt";
   return fs::exists(p) && !read_colmap_points3d(p.string()).empty();
+}
+
+// Resuming: the run's detected/ must hold the masks this run asks for (weights, averaging, rule,
+// adaptation and its options), else the run would train on other masks than its options and
+// results.json say.
+void check_resumed_masks(const fs::path& report_path, const restoration::DetectDatasetOptions& d,
+                         const std::optional<LedAdaptOptions>& adapt) {
+  const Json report = read_json_file(report_path.string());
+  const bool adapted = !report.value("adaptation", Json()).is_null();
+  if (adapted != adapt.has_value())
+    throw InputError(report_path.string(), std::string("holds LED masks made ") + (adapted ? "with" : "without") +
+                                               " --led-adapt, this run asks for them " + (adapted ? "without" : "with") +
+                                               " it: pass --force to redo the run");
+  restoration::LensDetector led = restoration::LensDetector::load(d.weights);
+  if (adapt) use_adapted_peak_rule(led);
+  std::string why = restoration::detect_settings_mismatch(
+      report, restoration::detect_settings_json(led.metadata().value("weights_sha256", ""), d, d.mask.resolved(led)));
+  if (why.empty() && adapt) why = restoration::detect_settings_mismatch(report["adaptation"], adaptation_settings_json(*adapt));
+  if (!why.empty())
+    throw InputError(report_path.string(), "holds LED masks made with other settings than this run asks for (" + why +
+                                               "): pass --force to redo the run");
 }
 
 }  // namespace
@@ -122,23 +145,21 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   }
 
   // 2b. The LED on the raw views (method.h says why), averaged over the training views.
-  const fs::path detect_report = run / kDetectedDir / restoration::kDetectReportFile;
-  if (r.lens_detector && fs::exists(detect_report)) {  // resuming: the masks must be the ones asked for
-    const bool adapted = !read_json_file(detect_report.string()).value("adaptation", Json()).is_null();
-    if (adapted != (o.led_adapt && !r.led_per_view))
-      throw InputError(detect_report.string(), std::string("holds LED masks made ") + (adapted ? "with" : "without") +
-                                                   " --led-adapt, this run asks for them " + (adapted ? "without" : "with") +
-                                                   " it: pass --force to redo the run");
-  }
-  if (r.lens_detector && !fs::exists(detect_report)) {
-    stage("detecting lens drops (LED, averaged over the training views)");
+  if (r.lens_detector) {
     restoration::DetectDatasetOptions d;
     d.weights = o.led_weights;
     d.mask = o.led_mask;
     if (r.led_per_view) d.averaging = restoration::LedAveraging::kPerView;
-    if (o.led_adapt && !r.led_per_view)
-      d.adapt = led_adaptation_hook(*o.led_adapt);
-    restoration::detect_dataset(o.dataset, (run / kDetectedDir).string(), d);
+    std::optional<LedAdaptOptions> adapt;
+    if (o.led_adapt && !r.led_per_view) adapt = *o.led_adapt;
+    const fs::path detect_report = run / kDetectedDir / restoration::kDetectReportFile;
+    if (fs::exists(detect_report)) {
+      check_resumed_masks(detect_report, d, adapt);
+    } else {
+      stage("detecting lens drops (LED, averaged over the training views)");
+      if (adapt) d.adapt = led_adaptation_hook(*adapt);
+      restoration::detect_dataset(o.dataset, (run / kDetectedDir).string(), d);
+    }
   }
 
   // 3. Training (resumed when an earlier run of the same options stopped part way), 4. test renders.

@@ -9,6 +9,7 @@
 #include "core/dataset.h"
 #include "core/json_reader.h"
 #include "datagen/process.h"
+#include "restoration/lens_detector.h"
 #include "study/reconstruct.h"
 #include "tests/core/test_util.h"
 #include "tests/generator/test_scene.h"
@@ -173,7 +174,8 @@ TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
 }
 
 // --led-adapt: the LED's masks say they were adapted (detect.json's "adaptation"), and a run resumed
-// with the other choice refuses the masks it holds instead of mixing them in.
+// with the other choice, other adaptation options or another mask rule refuses the masks it holds
+// instead of mixing them in.
 TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   TempDir tmp;
   const std::string data = weathered_dataset(tmp);
@@ -196,8 +198,30 @@ TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   ASSERT_TRUE(d.contains("adaptation"));
   EXPECT_EQ(d.at("adaptation").at("iterations"), 4);
   EXPECT_EQ(d.at("adaptation").at("layouts").size(), 1u);
+  // cut by the weights' rule for adapted maps
+  EXPECT_EQ(d.at("peak_rule"), restoration::LensDetector::load(o.led_weights).adapted_peak_rule()->to_json());
   EXPECT_THROW(reconstruct(options(data, run, Method::kWeatherGSNoAef)), InputError);
-  EXPECT_TRUE(reconstruct(o).resumed);
+  // Masks adapted or cut otherwise than this run asks for are refused too, naming what differs.
+  auto refusal = [&](const ReconstructOptions& other) -> std::string {
+    try {
+      reconstruct(other);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  ReconstructOptions more = o;
+  more.led_adapt->iterations = 5;
+  EXPECT_NE(refusal(more).find("iterations: holds 4, asked for 5"), std::string::npos) << refusal(more);
+  ReconstructOptions cut = o;
+  cut.led_mask.peak = restoration::LedPeakRule{0.4, 0.5, 0.7};
+  EXPECT_NE(refusal(cut).find("peak_rule"), std::string::npos) << refusal(cut);
+  ReconstructOptions dilated = o;
+  dilated.led_mask.dilate_iterations = 1;
+  EXPECT_NE(refusal(dilated).find("dilate_iterations: holds 3, asked for 1"), std::string::npos) << refusal(dilated);
+  ReconstructOptions threads = o;  // the threads change only the last bits: not a different request
+  threads.led_adapt->threads = 2;
+  EXPECT_TRUE(reconstruct(threads).resumed);
   EXPECT_TRUE(fs::exists(run + "/results.json"));
 }
 
