@@ -140,6 +140,20 @@ torch::Tensor mask_to_tensor(const Image& mask, int w, int h) {
 }
 
 // sum_t theta^(N-1-t) MSE(A_t, M); with `weight` (same shape as the target) each MSE is the weighted mean.
+// One example's share of attention_loss over a batch whose normalizer (the weights' sum, or the
+// batch's element count without weights) is `normalizer`: the shares of a batch sum to its loss.
+torch::Tensor attention_loss_share(const std::vector<torch::Tensor>& maps, const torch::Tensor& target, double theta,
+                                   const torch::Tensor& weight, double normalizer) {
+  torch::Tensor loss = torch::zeros({});
+  const int n = int(maps.size());
+  for (int t = 0; t < n; ++t) {
+    const torch::Tensor sq = (maps[size_t(t)] - target).square();
+    const torch::Tensor sum = weight.defined() ? (sq * weight).sum() : sq.sum();
+    loss = loss + std::pow(theta, n - 1 - t) * sum / normalizer;
+  }
+  return loss;
+}
+
 torch::Tensor attention_loss(const std::vector<torch::Tensor>& maps, const torch::Tensor& target, double theta,
                              const torch::Tensor& weight = {}) {
   torch::Tensor loss = torch::zeros({});
@@ -250,6 +264,9 @@ void LedTrainOptions::validate() const {
   if (!(colour_jitter >= 0 && colour_jitter <= 0.5))
     throw InputError("LED training colour_jitter", "expected in [0, 0.5], got " + std::to_string(colour_jitter));
   if (threads < 0) throw InputError("LED training threads", "expected >= 0, got " + std::to_string(threads));
+  if (gradient == LedGradient::kPerExample && arch.view_pooling != LedViewPooling::kNone)
+    throw InputError("LED training gradient", "per-example gradients need a per-view network (view_pooling none): "
+                                              "a view-pooling network's batch is one forward pass");
 }
 
 void LedPeakRule::validate() const {
@@ -374,11 +391,59 @@ LensDetector LensDetector::load(const std::string& stem) {
   return d;
 }
 
+namespace {
+
+// LedGradient::kPerExample: sets every parameter's gradient to that of the batch loss, computed as the
+// sum, in batch order, of the gradients of each example's share (attention_loss_share), each taken
+// with one intra-op thread on whichever worker runs it (`threads` at a time). Neither the split nor
+// the sum depends on the thread count, so neither do the weights. Returns the batch loss.
+double per_example_gradients(LedNet& net, const std::vector<torch::Tensor>& bx, const std::vector<torch::Tensor>& bm,
+                             const std::vector<torch::Tensor>& bw, double theta, int threads) {
+  const size_t n = bx.size();
+  double normalizer = 0;
+  if (bw.empty()) {
+    for (const torch::Tensor& m : bm) normalizer += double(m.numel());
+  } else {
+    for (const torch::Tensor& w : bw) normalizer += w.sum().item<double>();  // batch order
+    normalizer = std::max(normalizer, 1e-6);
+  }
+  const std::vector<torch::Tensor> params = net->parameters();
+  std::vector<std::vector<torch::Tensor>> grads(n);
+  std::vector<double> shares(n, 0.0);
+  auto one = [&](int64_t b) {
+    torch::set_num_threads(1);  // this worker's own OpenMP setting: one intra-op thread
+    const size_t i = size_t(b);
+    const torch::Tensor share = attention_loss_share(net->forward(bx[i].unsqueeze(0)), bm[i].unsqueeze(0), theta,
+                                                     bw.empty() ? torch::Tensor() : bw[i].unsqueeze(0), normalizer);
+    grads[i] = torch::autograd::grad({share}, params);
+    shares[i] = share.item<double>();
+  };
+  if (threads == 1) {
+    for (size_t b = 0; b < n; ++b) one(int64_t(b));
+  } else {
+    parallel_for(0, int64_t(n), one);
+  }
+  double loss = 0;
+  for (size_t p = 0; p < params.size(); ++p) {
+    torch::Tensor g = grads[0][p].clone();
+    for (size_t b = 1; b < n; ++b) g.add_(grads[b][p]);
+    params[p].mutable_grad() = g;
+  }
+  for (double s : shares) loss += s;
+  return loss;
+}
+
+}  // namespace
+
 LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, const LedTrainOptions& o) {
   o.validate();
   if (examples.empty()) throw InputError("LED training set", "is empty");
   const auto start = std::chrono::steady_clock::now();
-  torch::set_num_threads(o.threads > 0 ? o.threads : num_threads());
+  const bool per_example = o.gradient == LedGradient::kPerExample;
+  if (per_example && impl_->arch.view_pooling != LedViewPooling::kNone)
+    throw InputError("LED training gradient", "per-example gradients need a per-view network, this one pools over the views");
+  const int threads = o.threads > 0 ? o.threads : num_threads();
+  torch::set_num_threads(per_example ? 1 : threads);
   std::vector<torch::Tensor> xs, ms;
   examples_to_tensors(examples, impl_->arch, "LED training example ", xs, ms);
   std::vector<torch::Tensor> ws;
@@ -455,11 +520,16 @@ LedTrainRecord LensDetector::train(const std::vector<LedExample>& examples, cons
     }
     detail::set_cosine_learning_rate(adam, o.learning_rate, it, o.iterations);
     adam.zero_grad();
-    const torch::Tensor loss = attention_loss(net->forward(torch::stack(bx)), torch::stack(bm), o.theta,
-                                              use_weights ? torch::stack(bw) : torch::Tensor());
-    loss.backward();
+    double l = 0;
+    if (per_example) {
+      l = per_example_gradients(net, bx, bm, bw, o.theta, threads);
+    } else {
+      const torch::Tensor loss = attention_loss(net->forward(torch::stack(bx)), torch::stack(bm), o.theta,
+                                                use_weights ? torch::stack(bw) : torch::Tensor());
+      loss.backward();
+      l = loss.item<double>();
+    }
     adam.step();
-    const double l = loss.item<double>();
     if (!std::isfinite(l)) throw NumericalDivergence("LED training loss became non-finite at iteration " + std::to_string(it) + " (lower --learning-rate)");
     window += l;
     if ((it + 1) % 50 == 0 || it + 1 == o.iterations) {

@@ -70,6 +70,15 @@ struct LedPeakRule {
 // The largest per-pixel weight of the drop-size balance (LedTrainOptions::drop_balance_area).
 inline constexpr double kMaxDropWeight = 4.0;
 
+// How a training batch's gradient is computed.
+// kBatched: one forward and backward pass over the stacked batch with `threads` libtorch intra-op
+//   threads (the shipped weights' recipe; the weights depend on the thread count in their last bits).
+// kPerExample: each example's share of the batch loss is differentiated on its own with one intra-op
+//   thread, `threads` examples at a time, and the shares' gradients are summed in batch order: the
+//   same weights whatever the thread count (the test-time adaptation, study/led_adaptation). Not for
+//   view-pooling networks, whose examples are one forward pass.
+enum class LedGradient { kBatched, kPerExample };
+
 struct LedTrainOptions {
   LedArchitecture arch;
   int iterations = 4500;
@@ -86,7 +95,8 @@ struct LedTrainOptions {
   // loss is the weighted mean: small and medium drops count per drop more like the large ones do.
   double drop_balance_area = 0;
   uint64_t seed = 1;
-  int threads = 0;              // 0 = all cores (libtorch intra-op threads)
+  int threads = 0;              // 0 = all cores (libtorch intra-op threads, or examples at a time)
+  LedGradient gradient = LedGradient::kBatched;
   bool progress = true;
   void validate() const;
 };

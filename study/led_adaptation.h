@@ -53,7 +53,7 @@ Json adapt_layout_spec(int k);
 
 // The copy of `base` fine-tuned on `images` (sRGB, the training views `views` of `dataset`, in dataset
 // order). `report` gets the options, the layouts, the ignored fraction, the loss and the seconds.
-// Deterministic for a given thread count.
+// The same network whatever the thread count (restoration::LedGradient::kPerExample).
 restoration::LensDetector adapt_led(const restoration::LensDetector& base, const Dataset& dataset,
                                     const std::vector<std::string>& views, const std::vector<Image>& images,
                                     const LedAdaptOptions& options, Json& report);
@@ -63,9 +63,9 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
 // Sets `led`'s peak rule to it; leaves `led` as it is otherwise.
 void use_adapted_peak_rule(restoration::LensDetector& led);
 
-// The options that decide the adapted network, as adapt_led's report holds them (the threads are not
-// among them: they change only the last bits). A run that resumes compares them with
-// restoration::detect_settings_mismatch (study/reconstruct).
+// The options that decide the adapted network, as adapt_led's report holds them, and its gradient
+// mode (per-example, so the thread count does not change the network and is not among them). A run
+// that resumes compares them with restoration::detect_settings_mismatch (study/reconstruct).
 Json adaptation_settings_json(const LedAdaptOptions& options);
 
 // adapt_led with `options` as restoration::detect_dataset's adapt hook (`detect --adapt`,

@@ -48,7 +48,7 @@ void check_resumed_masks(const fs::path& report_path, const restoration::DetectD
   if (adapt) use_adapted_peak_rule(led);
   std::string why = restoration::detect_settings_mismatch(
       report, restoration::detect_settings_json(led.metadata().value("weights_sha256", ""), d, d.mask.resolved(led)));
-  if (why.empty() && adapt) why = restoration::detect_settings_mismatch(report["adaptation"], adaptation_settings_json(*adapt));
+  if (why.empty() && adapt) why = restoration::detect_settings_mismatch(report.at("adaptation"), adaptation_settings_json(*adapt));
   if (!why.empty())
     throw InputError(report_path.string(), "holds LED masks made with other settings than this run asks for (" + why +
                                                "): pass --force to redo the run");

@@ -110,6 +110,56 @@ TEST(LensDetectorTest, TrainingWithOneThreadIsReproducible) {
   EXPECT_THROW(led.train(set, o), InputError);
 }
 
+// Per-example gradients (the test-time adaptation's): the same weights with 1 and 2 threads, byte for
+// byte, also with per-pixel loss weights; one step moves the weights as the batched gradient does (the
+// shares sum to the batch loss); a view-pooling network refuses them.
+TEST(LensDetectorTest, PerExampleGradientsAreThreadCountInvariantAndEqualTheBatchedOnes) {
+  std::vector<LedExample> set;
+  for (int i = 0; i < 6; ++i) set.push_back(toy_example(64, 48, 8, i, i % 3 != 2));
+  for (int i = 0; i < 6; i += 2) {  // loss weights on half the examples: zero over the left third
+    set[size_t(i)].weight = Image(64, 48, 1, ColorSpace::kLinear);
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 64; ++x) set[size_t(i)].weight.at(x, y) = x < 21 ? 0.f : 1.f;
+  }
+  LedTrainOptions o;
+  o.arch = tiny_arch();
+  o.iterations = 12;
+  o.batch = 4;
+  o.gradient = LedGradient::kPerExample;
+  o.progress = false;
+  testing::TempDir tmp;
+  const int before = num_threads();
+  for (int threads : {1, 2}) {
+    set_num_threads(threads);
+    o.threads = threads;
+    LensDetector led(tiny_arch(), 3);
+    led.train(set, o);
+    led.save(tmp / ("t" + std::to_string(threads)), Json::object());
+  }
+  set_num_threads(before);
+  EXPECT_EQ(read_file(tmp / "t1.bin"), read_file(tmp / "t2.bin"));
+  // One iteration each way: the same loss, and the same weights to float rounding.
+  LedTrainOptions one = o;
+  one.iterations = 1;
+  one.threads = 1;
+  LensDetector per(tiny_arch(), 4), batched(tiny_arch(), 4);
+  const LedTrainRecord rp = per.train(set, one);
+  one.gradient = LedGradient::kBatched;
+  const LedTrainRecord rb = batched.train(set, one);
+  ASSERT_EQ(rp.loss_curve.size(), 1u);
+  EXPECT_NEAR(rp.loss_curve[0], rb.loss_curve[0], 1e-6 * rb.loss_curve[0]);
+  // Adam's first step is ~lr * g / |g| per parameter, so equal gradients give equal maps to float
+  // rounding; a different gradient would move some parameters the other way (~2 lr apart).
+  const LedExample probe = toy_example(64, 48, 99, 0, true);
+  const Image ap = per.attention(probe.image, "per"), ab = batched.attention(probe.image, "batched");
+  double worst = 0;
+  for (size_t i = 0; i < ap.data.size(); ++i) worst = std::max(worst, double(std::abs(ap.data[i] - ab.data[i])));
+  EXPECT_LT(worst, 1e-4);
+  LedTrainOptions pooled = o;
+  pooled.arch.view_pooling = LedViewPooling::kAttention;
+  EXPECT_THROW(pooled.validate(), InputError);
+}
+
 // A textured view with one large and one small textureless disc at the texture's mean (drops seen
 // only through the missing texture) and their mask.
 LedExample two_size_example(int w, int h, uint64_t seed, int index) {

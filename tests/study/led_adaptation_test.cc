@@ -7,6 +7,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 #include "core/json_reader.h"
+#include "core/parallel.h"
 #include "restoration/detect_dataset.h"
 #include "restoration/led_training.h"
 #include "study/led_adaptation.h"
@@ -82,6 +83,17 @@ TEST(LedAdaptationTest, FineTunesACopyDeterministicallyAndReportsIt) {
   EXPECT_EQ(base.attention(s.images[0], "view").data, before);
   EXPECT_FALSE(same_attention(a, base, s.images[0]));
   EXPECT_TRUE(same_attention(a, b, s.images[0]));
+  // Two threads give the same network too (per-example gradients summed in batch order).
+  const int threads_before = num_threads();
+  set_num_threads(2);
+  LedAdaptOptions two = small_options();
+  two.threads = 2;
+  Json report3;
+  const LensDetector c = adapt_led(base, s.ds, s.views, s.images, two, report3);
+  set_num_threads(threads_before);
+  EXPECT_TRUE(same_attention(a, c, s.images[0]));
+  EXPECT_EQ(report3["threads"].get<int>(), 2);
+  EXPECT_EQ(report["gradient"].get<std::string>(), "per-example");
   EXPECT_EQ(a.peak_rule().has_value(), base.peak_rule().has_value());
   EXPECT_DOUBLE_EQ(a.threshold(), base.threshold());
   // The report: both layouts, new drops on the views, what was left out, the fine-tune.
