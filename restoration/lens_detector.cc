@@ -139,7 +139,6 @@ torch::Tensor mask_to_tensor(const Image& mask, int w, int h) {
   return torch::from_blob(small.ptr<float>(), {1, h, w}, torch::kFloat32).clone().clamp(0.f, 1.f);
 }
 
-// sum_t theta^(N-1-t) MSE(A_t, M); with `weight` (same shape as the target) each MSE is the weighted mean.
 // One example's share of attention_loss over a batch whose normalizer (the weights' sum, or the
 // batch's element count without weights) is `normalizer`: the shares of a batch sum to its loss.
 torch::Tensor attention_loss_share(const std::vector<torch::Tensor>& maps, const torch::Tensor& target, double theta,
@@ -154,6 +153,7 @@ torch::Tensor attention_loss_share(const std::vector<torch::Tensor>& maps, const
   return loss;
 }
 
+// sum_t theta^(N-1-t) MSE(A_t, M); with `weight` (same shape as the target) each MSE is the weighted mean.
 torch::Tensor attention_loss(const std::vector<torch::Tensor>& maps, const torch::Tensor& target, double theta,
                              const torch::Tensor& weight = {}) {
   torch::Tensor loss = torch::zeros({});

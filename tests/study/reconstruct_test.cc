@@ -219,7 +219,7 @@ TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   ReconstructOptions dilated = o;
   dilated.led_mask.dilate_iterations = 1;
   EXPECT_NE(refusal(dilated).find("dilate_iterations: holds 3, asked for 1"), std::string::npos) << refusal(dilated);
-  ReconstructOptions threads = o;  // the threads change only the last bits: not a different request
+  ReconstructOptions threads = o;  // the adapted network does not depend on the threads: the same request
   threads.led_adapt->threads = 2;
   EXPECT_TRUE(reconstruct(threads).resumed);
   EXPECT_TRUE(fs::exists(run + "/results.json"));
