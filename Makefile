@@ -59,8 +59,9 @@ validation-data: build
 	TRAINING_PART=validation bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(VALIDATION_DATA) 12 quick
 
 # The peak rule `detect --adapt` uses, calibrated on the validation scenes' adapted maps
-# (docs/restoration_led_adapted.md, "A rule for adapted maps"; ~40 min on 2 cores; needs
-# validation-data). Writes the LED weights in place (LED_WEIGHTS) with that rule added.
+# (docs/restoration_led_adapted.md, "A rule for adapted maps"; ~13 min on 2 cores with the default
+# 100 adaptation iterations; needs validation-data). Writes the LED weights in place (LED_WEIGHTS)
+# with that rule added.
 LED_WEIGHTS ?= models/led/led
 ADAPTED_MAPS ?= data/validation_adapted_maps
 adapted-led-rule: build

@@ -8,9 +8,8 @@
 #   scripts/calibrate-adapted-led.sh WEATHERGS HELD_OUT MAPS WEIGHTS_STEM [OUT_STEM]
 #
 # MAPS caches the detect outputs (a finished one is kept; delete it to redo it). Each detect runs on
-# one thread, JOBS (default 2) at a time: the fine-tune's libtorch threads wait actively, so two
-# one-thread runs use 2 cores better than one two-thread run beside anything else, and the maps do
-# not depend on how many run at once. About 200 s per dataset on one core, ~40 min for the 24
+# one thread, JOBS (default 2) at a time; the maps depend neither on how many run at once nor on the
+# thread count. About 60 s per dataset on one core (100 adaptation iterations), ~13 min for the 24
 # validation datasets on 2 cores. MIN_PRECISION (default 0.8, issue 11's target; "none" for the
 # plain highest mean IoU).
 set -euo pipefail
