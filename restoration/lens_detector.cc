@@ -227,6 +227,15 @@ const char* to_string(LedViewPooling p) {
   return "";
 }
 
+const char* to_string(LedGradient g) {
+  switch (g) {
+    case LedGradient::kBatched: return "batched";
+    case LedGradient::kPerExample: return "per-example";
+  }
+  WGS_CHECK(false);
+  return "";
+}
+
 LedViewPooling parse_led_view_pooling(const std::string& s, const std::string& where) {
   for (LedViewPooling p : {LedViewPooling::kNone, LedViewPooling::kAttention, LedViewPooling::kAttentionAndState})
     if (s == to_string(p)) return p;

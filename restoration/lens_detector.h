@@ -78,6 +78,7 @@ inline constexpr double kMaxDropWeight = 4.0;
 //   same weights whatever the thread count (the test-time adaptation, study/led_adaptation). Not for
 //   view-pooling networks, whose examples are one forward pass.
 enum class LedGradient { kBatched, kPerExample };
+const char* to_string(LedGradient g);  // "batched", "per-example"
 
 struct LedTrainOptions {
   LedArchitecture arch;

@@ -136,7 +136,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   t.learning_rate = o.learning_rate;
   t.seed = o.seed;
   t.threads = o.threads;
-  t.gradient = restoration::LedGradient::kPerExample;  // the same adapted network whatever the thread count
+  t.gradient = kAdaptGradient;
   t.progress = o.progress;
   const restoration::LedTrainRecord rec = adapted.train(examples, t);
   use_adapted_peak_rule(adapted);
@@ -166,7 +166,7 @@ Json adaptation_settings_json(const LedAdaptOptions& o) {
               {"seed", o.seed},
               {"ignore_level", o.ignore_level},
               {"ignore_dilations", o.ignore_dilations},
-              {"gradient", "per-example"}};  // restoration::LedGradient::kPerExample (before 2026-11-29: batched)
+              {"gradient", restoration::to_string(kAdaptGradient)}};
 }
 
 restoration::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options) {
