@@ -19,6 +19,7 @@ struct DetectArgs {
   std::vector<double> band{0.5, 0.7};
   std::vector<double> peak;
   bool adapt = false;
+  int adapt_iterations = 0;  // 0: from adapt_options.passes
   study::LedAdaptOptions adapt_options;
   restoration::DetectDatasetOptions options;
 };
@@ -44,6 +45,7 @@ int run(DetectArgs& a) {
   a.options.mask.band_lo = a.band[0];
   a.options.mask.band_hi = a.band[1];
   if (a.adapt) {
+    if (a.adapt_iterations > 0) a.adapt_options.iterations = a.adapt_iterations;
     a.adapt_options.validate();
     a.options.adapt = study::led_adaptation_hook(a.adapt_options);
   }
@@ -92,16 +94,27 @@ Command make(CLI::App& root) {
       ->check(CLI::Range(0, restoration::kMaxDilations));
   sub->add_flag("--save-attention", a->options.save_attention,
                 "Also write the soft attention behind each mask as attention/<view>.png (16-bit, value = attention)");
-  sub->add_flag("--adapt", a->adapt,
+  CLI::Option* adapt = sub->add_flag("--adapt", a->adapt,
                 "Adapt the network to this scene first: fine-tune a copy on the training views with new lens drops "
-                "rendered over them (~31 s on 2 cores for a quick-profile dataset), then cut its map with the weights' "
+                "rendered over them (~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper profile), then cut its map with the weights' "
                 "adapted peak rule when they store one (docs/restoration_led_adapted.md)");
-  sub->add_option("--adapt-iterations", a->adapt_options.iterations,
-                  "Fine-tuning iterations of --adapt (30: ~3x sooner, IoU ~0.005 lower on the validation scenes; "
+  CLI::Option* passes =
+      sub->add_option("--adapt-passes", a->adapt_options.passes,
+                      "Length of --adapt's fine-tune, in passes over its layouts x training views examples (the "
+                      "default makes 100 iterations for 14 training views, 207 for 29; docs/restoration_led_adapted.md, "
+                      "\"Scaled with the training views\")")
+          ->capture_default_str()
+          ->needs(adapt);
+  sub->add_option("--adapt-iterations", a->adapt_iterations,
+                  "A fixed iteration count for --adapt's fine-tune instead of --adapt-passes (30 on a 14-view "
+                  "dataset: ~3x sooner than the default 100, IoU ~0.005 lower on the validation scenes; "
                   "docs/restoration_led_adapted.md, \"Fewer still\")")
-      ->capture_default_str();
+      ->check(CLI::Range(1, 100000))
+      ->excludes(passes)
+      ->needs(adapt);
   sub->add_option("--adapt-layouts", a->adapt_options.layouts, "Drop layouts rendered over every training view by --adapt")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->needs(adapt);
   return {sub, [a] {
             a->adapt_options.threads = num_threads();
             return run(*a);

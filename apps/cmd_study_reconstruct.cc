@@ -133,7 +133,8 @@ Command make(CLI::App& root) {
       ->check(CLI::Range(0.0, 1.0));
   sub->add_flag("--led-adapt", a->led_adapt,
                 "Adapt the LED to the dataset first (`detect --adapt`: a fine-tune on the training views with new lens "
-                "drops, ~31 s on 2 cores for a quick-profile dataset; docs/restoration_led_adapted.md)");
+                "drops, ~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper profile; "
+                "docs/restoration_led_adapted.md)");
   a->scoring.add_to(sub);
   return {sub, [a] { return run(*a); }};
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
@@ -15,6 +16,9 @@
 
 namespace weathergs::study {
 namespace {
+
+constexpr int kMaxIterations = 100000;
+constexpr double kMaxPasses = 1000;
 
 // Where the base network's averaged map may hide the scene's own drops: m >= level, dilated with a
 // 3x3 cross `dilations` times. 1 = left out of the loss.
@@ -35,8 +39,10 @@ Image ignore_region(const Image& averaged, double level, int dilations) {
 
 void LedAdaptOptions::validate() const {
   if (layouts < 1 || layouts > 64) throw InputError("LED adaptation layouts", "expected 1..64, got " + std::to_string(layouts));
-  if (iterations < 1 || iterations > 100000)
-    throw InputError("LED adaptation iterations", "expected 1..100000, got " + std::to_string(iterations));
+  if (!(passes > 0 && passes <= kMaxPasses))
+    throw InputError("LED adaptation passes", "expected in (0, " + std::to_string(int(kMaxPasses)) + "], got " + std::to_string(passes));
+  if (iterations && (*iterations < 1 || *iterations > kMaxIterations))
+    throw InputError("LED adaptation iterations", "expected 1.." + std::to_string(kMaxIterations) + ", got " + std::to_string(*iterations));
   if (!(learning_rate > 0 && learning_rate < 1))
     throw InputError("LED adaptation learning rate", "expected in (0, 1), got " + std::to_string(learning_rate));
   if (batch < 1 || batch > 64) throw InputError("LED adaptation batch", "expected 1..64, got " + std::to_string(batch));
@@ -45,6 +51,16 @@ void LedAdaptOptions::validate() const {
   if (ignore_dilations < 0 || ignore_dilations > 16)
     throw InputError("LED adaptation ignore dilations", "expected 0..16, got " + std::to_string(ignore_dilations));
   if (threads < 0) throw InputError("LED adaptation threads", "expected >= 0, got " + std::to_string(threads));
+}
+
+int LedAdaptOptions::fine_tune_iterations(size_t train_views) const {
+  if (iterations) return *iterations;
+  const double n = std::round(passes * double(layouts) * double(train_views) / double(batch));
+  if (n > kMaxIterations)
+    throw InputError("LED adaptation", std::to_string(train_views) + " training views at " + std::to_string(passes) +
+                                           " passes need " + std::to_string(int64_t(n)) + " iterations, over the " +
+                                           std::to_string(kMaxIterations) + " allowed: fix fewer with --adapt-iterations");
+  return std::max(1, int(n));
 }
 
 Json adapt_layout_spec(int k) {
@@ -131,7 +147,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   restoration::LensDetector adapted = base.clone();
   restoration::LedTrainOptions t;
   t.arch = base.architecture();
-  t.iterations = o.iterations;
+  t.iterations = o.fine_tune_iterations(views.size());
   t.batch = o.batch;
   t.learning_rate = o.learning_rate;
   t.seed = o.seed;
@@ -150,7 +166,8 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
                 {"training_seconds", rec.seconds},
                 {"peak_rule", base.adapted_peak_rule() ? "adapted_peak_rule" : "peak_rule"},
                 {"seconds", seconds_since(start)}};
-  report.update(adaptation_settings_json(o));
+  report["passes"] = o.iterations ? Json() : Json(o.passes);  // null: the count was fixed
+  report.update(adaptation_settings_json(o, views.size()));
   return adapted;
 }
 
@@ -158,9 +175,9 @@ void use_adapted_peak_rule(restoration::LensDetector& led) {
   if (led.adapted_peak_rule()) led.set_peak_rule(led.adapted_peak_rule());
 }
 
-Json adaptation_settings_json(const LedAdaptOptions& o) {
+Json adaptation_settings_json(const LedAdaptOptions& o, size_t train_views) {
   return Json{{"layout_count", o.layouts},
-              {"iterations", o.iterations},
+              {"iterations", o.fine_tune_iterations(train_views)},
               {"batch", o.batch},
               {"learning_rate", o.learning_rate},
               {"seed", o.seed},

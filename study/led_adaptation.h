@@ -9,7 +9,9 @@
 // recipes' `--led-adapt` run it.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,11 +28,13 @@ struct LedAdaptOptions {
   // set's recipe (scripts/make-training-data.sh: radius 0.3-1.5 mm, glass at 15 mm), with the style
   // and count of kAdaptLayouts[k % 4] and weather seed kAdaptSeedBase + k + 1.
   int layouts = 4;
-  // 100 since 2026-11-29 (300 before): on the validation scenes' 20 datasets with drops the adapted
-  // rule scores the same with both (IoU 0.743, precision 0.832 / 0.831) at a third of the fine-tune
-  // (docs/restoration_led_adapted.md, "Fewer iterations"). Chosen at the quick profile: at the paper
-  // profile (29 training views) 300 scored ~0.01 IoU higher ("The paper profile end to end").
-  int iterations = 100;
+  // How long the fine-tune runs: `passes` over its layouts x training views examples, in whole
+  // iterations of `batch` (fine_tune_iterations), unless `iterations` fixes the count. 400/56 passes
+  // make 100 iterations on a quick-profile dataset (14 training views, 56 examples), where 100 scored
+  // as 300 did (docs/restoration_led_adapted.md, "Fewer iterations"), and 207 on a paper-profile one
+  // (29 views), where a fixed 100 scored ~0.01 IoU under 300 ("Scaled with the training views").
+  double passes = 400.0 / 56.0;
+  std::optional<int> iterations;
   double learning_rate = 5e-4;  // a quarter of the training recipe's 2e-3: a fine-tune, not a new network
   int batch = 4;
   // The base network's averaged attention at or above this level, dilated ignore_dilations times
@@ -41,6 +45,9 @@ struct LedAdaptOptions {
   int threads = 0;     // libtorch threads of the fine-tune (0 = all cores)
   bool progress = true;
   void validate() const;  // InputError naming the option
+  // The fine-tune's iterations for `train_views` training views: `iterations` when set, else
+  // round(passes * layouts * train_views / batch), at least 1.
+  int fine_tune_iterations(size_t train_views) const;
 };
 
 struct LedAdaptLayout {
@@ -70,10 +77,12 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
 // Sets `led`'s peak rule to it; leaves `led` as it is otherwise.
 void use_adapted_peak_rule(restoration::LensDetector& led);
 
-// The options that decide the adapted network, as adapt_led's report holds them, and its gradient
-// mode (per-example, so the thread count does not change the network and is not among them). A run
-// that resumes compares them with restoration::detect_settings_mismatch (study/reconstruct).
-Json adaptation_settings_json(const LedAdaptOptions& options);
+// The options that decide the adapted network of a dataset with `train_views` training views, as
+// adapt_led's report holds them (the iteration count resolved, so `passes` and a fixed count that
+// agree are the same request), and its gradient mode (per-example, so the thread count does not
+// change the network and is not among them). A run that resumes compares them with
+// restoration::detect_settings_mismatch (study/reconstruct).
+Json adaptation_settings_json(const LedAdaptOptions& options, size_t train_views);
 
 // adapt_led with `options` as restoration::detect_dataset's adapt hook (`detect --adapt`,
 // `reconstruct --led-adapt`).

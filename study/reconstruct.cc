@@ -37,7 +37,7 @@ bool has_points(const std::string& model_dir) {
 // adaptation and its options), else the run would train on other masks than its options and
 // results.json say.
 void check_resumed_masks(const fs::path& report_path, const restoration::DetectDatasetOptions& d,
-                         const std::optional<LedAdaptOptions>& adapt) {
+                         const std::optional<LedAdaptOptions>& adapt, size_t train_views) {
   const Json report = read_json_file(report_path.string());
   const bool adapted = !report.value("adaptation", Json()).is_null();
   if (adapted != adapt.has_value())
@@ -48,7 +48,7 @@ void check_resumed_masks(const fs::path& report_path, const restoration::DetectD
   if (adapt) use_adapted_peak_rule(led);
   std::string why = restoration::detect_settings_mismatch(
       report, restoration::detect_settings_json(led.metadata().value("weights_sha256", ""), d, d.mask.resolved(led)));
-  if (why.empty() && adapt) why = restoration::detect_settings_mismatch(report.at("adaptation"), adaptation_settings_json(*adapt));
+  if (why.empty() && adapt) why = restoration::detect_settings_mismatch(report.at("adaptation"), adaptation_settings_json(*adapt, train_views));
   if (!why.empty())
     throw InputError(report_path.string(), "holds LED masks made with other settings than this run asks for (" + why +
                                                "): pass --force to redo the run");
@@ -154,7 +154,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     if (o.led_adapt && !r.led_per_view) adapt = *o.led_adapt;
     const fs::path detect_report = run / kDetectedDir / restoration::kDetectReportFile;
     if (fs::exists(detect_report)) {
-      check_resumed_masks(detect_report, d, adapt);
+      check_resumed_masks(detect_report, d, adapt, ds.split("train").size());
     } else {
       stage("detecting lens drops (LED, averaged over the training views)");
       if (adapt) d.adapt = led_adaptation_hook(*adapt);

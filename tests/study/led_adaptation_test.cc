@@ -1,6 +1,7 @@
 // Test-time adaptation of the LED (study/led_adaptation.h, `weathergs detect --adapt`).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "core/dataset.h"
@@ -111,8 +112,45 @@ TEST(LedAdaptationTest, FineTunesACopyDeterministicallyAndReportsIt) {
   EXPECT_LE(ignored, 1.0);
   EXPECT_EQ(report["iterations"].get<int>(), 6);
   EXPECT_EQ(report["views"].size(), s.views.size());
+  EXPECT_TRUE(report["passes"].is_null());  // the count was fixed
   EXPECT_TRUE(std::isfinite(report["loss_last_50"].get<double>()));
   for (float v : a.attention(s.images[1], "view").data) ASSERT_TRUE(std::isfinite(v));
+  // By passes: 1.5 passes over 2 layouts x the views in batches of 2.
+  LedAdaptOptions by_passes = small_options();
+  by_passes.iterations.reset();
+  by_passes.passes = 1.5;
+  Json report4;
+  adapt_led(base, s.ds, s.views, s.images, by_passes, report4);
+  EXPECT_EQ(report4["iterations"].get<int>(), int(std::lround(1.5 * 2 * double(s.views.size()) / 2)));
+  EXPECT_DOUBLE_EQ(report4["passes"].get<double>(), 1.5);
+}
+
+// The default length is a number of passes over the examples, so a dataset with more training views
+// gets more iterations; it was set so the quick profile keeps the 100 it was measured with.
+TEST(LedAdaptationTest, TheFineTuneLengthScalesWithTheTrainingViews) {
+  const LedAdaptOptions o;
+  EXPECT_EQ(o.fine_tune_iterations(14), 100);  // the quick profile: 4 layouts x 14 views, batch 4
+  EXPECT_EQ(o.fine_tune_iterations(29), 207);  // the paper profile
+  EXPECT_EQ(o.fine_tune_iterations(1), 7);
+  LedAdaptOptions fixed;
+  fixed.iterations = 100;
+  EXPECT_EQ(fixed.fine_tune_iterations(29), 100);
+  // The settings a resumed run compares hold the resolved count: passes and a fixed count that agree
+  // are the same request.
+  EXPECT_EQ(adaptation_settings_json(o, 14), adaptation_settings_json(fixed, 14));
+  EXPECT_NE(adaptation_settings_json(o, 29), adaptation_settings_json(fixed, 29));
+  EXPECT_EQ(adaptation_settings_json(o, 29)["iterations"].get<int>(), 207);
+  LedAdaptOptions tiny;
+  tiny.passes = 1e-6;
+  EXPECT_EQ(tiny.fine_tune_iterations(1), 1);  // at least one
+  LedAdaptOptions huge;
+  huge.passes = 1000;
+  EXPECT_THROW(huge.fine_tune_iterations(1000), InputError);  // 10^6 iterations: over the limit, named
+  for (double bad : {0.0, -1.0, 1001.0, std::nan("")}) {
+    LedAdaptOptions b;
+    b.passes = bad;
+    EXPECT_THROW(b.validate(), InputError) << bad;
+  }
 }
 
 TEST(LedAdaptationTest, BadOptionsAndInputsAreInputErrors) {
@@ -121,6 +159,7 @@ TEST(LedAdaptationTest, BadOptionsAndInputsAreInputErrors) {
   const LensDetector base(tiny_arch(), 3);
   Json report;
   for (auto bad : {+[](LedAdaptOptions& o) { o.layouts = 0; }, +[](LedAdaptOptions& o) { o.iterations = 0; },
+                   +[](LedAdaptOptions& o) { o.passes = 0; },
                    +[](LedAdaptOptions& o) { o.learning_rate = 0; }, +[](LedAdaptOptions& o) { o.ignore_level = 0; },
                    +[](LedAdaptOptions& o) { o.ignore_dilations = -1; }, +[](LedAdaptOptions& o) { o.batch = 0; }}) {
     LedAdaptOptions o = small_options();

@@ -219,7 +219,13 @@ TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   ReconstructOptions dilated = o;
   dilated.led_mask.dilate_iterations = 1;
   EXPECT_NE(refusal(dilated).find("dilate_iterations: holds 3, asked for 1"), std::string::npos) << refusal(dilated);
-  ReconstructOptions threads = o;  // the adapted network does not depend on the threads: the same request
+  // The same network asked for by passes instead of a fixed count, with another thread count (the
+  // adapted network depends on neither): the same request.
+  const size_t train_views = read_dataset(data).split("train").size();
+  ReconstructOptions threads = o;
+  threads.led_adapt->iterations.reset();
+  threads.led_adapt->passes = 4.0 * double(o.led_adapt->batch) / double(train_views);
+  ASSERT_EQ(threads.led_adapt->fine_tune_iterations(train_views), 4);
   threads.led_adapt->threads = 2;
   EXPECT_TRUE(reconstruct(threads).resumed);
   EXPECT_TRUE(fs::exists(run + "/results.json"));
