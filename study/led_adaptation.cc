@@ -59,7 +59,7 @@ int LedAdaptOptions::fine_tune_iterations(size_t train_views) const {
   if (n > kMaxIterations)
     throw InputError("LED adaptation", std::to_string(train_views) + " training views at " + std::to_string(passes) +
                                            " passes need " + std::to_string(int64_t(n)) + " iterations, over the " +
-                                           std::to_string(kMaxIterations) + " allowed: fix fewer with --adapt-iterations");
+                                           std::to_string(kMaxIterations) + " allowed: fix a count instead (detect --adapt-iterations)");
   return std::max(1, int(n));
 }
 
