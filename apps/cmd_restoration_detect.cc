@@ -94,10 +94,12 @@ Command make(CLI::App& root) {
       ->check(CLI::Range(0, restoration::kMaxDilations));
   sub->add_flag("--save-attention", a->options.save_attention,
                 "Also write the soft attention behind each mask as attention/<view>.png (16-bit, value = attention)");
-  CLI::Option* adapt = sub->add_flag("--adapt", a->adapt,
-                "Adapt the network to this scene first: fine-tune a copy on the training views with new lens drops "
-                "rendered over them (~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper profile), then cut its map with the weights' "
-                "adapted peak rule when they store one (docs/restoration_led_adapted.md)");
+  CLI::Option* adapt =
+      sub->add_flag("--adapt", a->adapt,
+                    "Adapt the network to this scene first: fine-tune a copy on the training views with new lens "
+                    "drops rendered over them (~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper "
+                    "profile), then cut its map with the weights' adapted peak rule when they store one "
+                    "(docs/restoration_led_adapted.md)");
   CLI::Option* passes =
       sub->add_option("--adapt-passes", a->adapt_options.passes,
                       "Length of --adapt's fine-tune, in passes over its layouts x training views examples (the "

@@ -81,6 +81,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   if (views.empty() || views.size() != images.size())
     throw InputError(ds.root, "LED adaptation needs the training views and their images (got " + std::to_string(views.size()) +
                                   " names, " + std::to_string(images.size()) + " images)");
+  const int iterations = o.fine_tune_iterations(views.size());  // before any work: it may refuse
   const auto start = std::chrono::steady_clock::now();
   std::vector<Image> rgb, linear;
   std::vector<Camera> cameras;
@@ -147,7 +148,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   restoration::LensDetector adapted = base.clone();
   restoration::LedTrainOptions t;
   t.arch = base.architecture();
-  t.iterations = o.fine_tune_iterations(views.size());
+  t.iterations = iterations;
   t.batch = o.batch;
   t.learning_rate = o.learning_rate;
   t.seed = o.seed;
