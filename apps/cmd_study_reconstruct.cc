@@ -19,6 +19,7 @@ struct ReconstructArgs {
   std::string led_weights, aef_weights;
   double led_threshold = 0;
   bool led_adapt = false;
+  int led_adapt_layouts = 0, led_adapt_iterations = 0;  // 0: LedAdaptOptions' defaults
   std::string mask_normalization = "valid";
   std::string large_prune = "distance";
   ScoringFlags scoring;
@@ -38,6 +39,8 @@ int run(ReconstructArgs& a) {
   if (a.led_adapt) {
     o.led_adapt = study::LedAdaptOptions{};
     o.led_adapt->threads = num_threads();
+    if (a.led_adapt_layouts > 0) o.led_adapt->layouts = a.led_adapt_layouts;
+    if (a.led_adapt_iterations > 0) o.led_adapt->iterations = a.led_adapt_iterations;
   }
   if (a.led_threshold > 0) {  // a global threshold: the paper's rule, also for weights with a peak rule
     o.led_mask.rule = restoration::LedThresholdRule::kAbove;
@@ -131,10 +134,20 @@ Command make(CLI::App& root) {
   sub->add_option("--led-threshold", a->led_threshold,
                   "LED mask where the attention >= t (default: the weights' calibrated rule, docs/restoration_led.md)")
       ->check(CLI::Range(0.0, 1.0));
-  sub->add_flag("--led-adapt", a->led_adapt,
-                "Adapt the LED to the dataset first (`detect --adapt`: a fine-tune on the training views with new lens "
-                "drops, ~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper profile; "
-                "docs/restoration_led_adapted.md)");
+  CLI::Option* adapt =
+      sub->add_flag("--led-adapt", a->led_adapt,
+                    "Adapt the LED to the dataset first (`detect --adapt`: a fine-tune on the training views with new "
+                    "lens drops, ~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper profile; "
+                    "docs/restoration_led_adapted.md)");
+  sub->add_option("--led-adapt-layouts", a->led_adapt_layouts,
+                  "Drop layouts of --led-adapt (`detect --adapt-layouts`; default 4)")
+      ->check(CLI::Range(1, 64))
+      ->needs(adapt);
+  sub->add_option("--led-adapt-iterations", a->led_adapt_iterations,
+                  "A fixed iteration count for --led-adapt (`detect --adapt-iterations`; default ~7 passes over the "
+                  "examples; 1 layout x 10 iterations: docs/restoration_led_adapted.md, \"At the speed aim\")")
+      ->check(CLI::Range(1, 100000))
+      ->needs(adapt);
   a->scoring.add_to(sub);
   return {sub, [a] { return run(*a); }};
 }

@@ -12,7 +12,7 @@ masks/lens (the `perceptible` truth) and against the drops' lens coverage >= 0.1
 reports them in detect.json), per dataset, then the mean and standard deviation over the seeds.
 
 Usage: restoration_led_layouts.py WEATHERGS OUT [--seeds 101-108] [--weights STEM] [--suite data/suite_paper] [--adapt]
-                                  [--save-attention]
+                                  [--adapt-layouts N] [--adapt-iterations N] [--save-attention]
   Run in the repository root (the suite and scenes/ are read from there). Datasets and masks are
   cached in OUT. Seed 7 is the benchmark's own draw.
 """
@@ -64,9 +64,22 @@ def main():
     p.add_argument("--suite", default="data/suite_paper", help="where the benchmark's rain variants are")
     p.add_argument("--adapt", action="store_true",
                    help="detect with --adapt (docs/restoration_led.md, \"Adapted to the scene\"); masks go to OUT/masks_adapt")
+    p.add_argument("--adapt-layouts", type=int, help="with --adapt: detect --adapt-layouts N (masks go to OUT/masks_adapt_lN...)")
+    p.add_argument("--adapt-iterations", type=int, help="with --adapt: detect --adapt-iterations N (masks go to OUT/masks_adapt..._iN)")
     p.add_argument("--save-attention", action="store_true",
                    help="also keep each map behind the masks (detect --save-attention), e.g. to read another rule on them")
     args = p.parse_args()
+    if (args.adapt_layouts or args.adapt_iterations) and not args.adapt:
+        p.error("--adapt-layouts and --adapt-iterations need --adapt")
+    adapt_args, masks_dir = [], "masks"
+    if args.adapt:
+        adapt_args, masks_dir = ["--adapt"], "masks_adapt"
+        if args.adapt_layouts:
+            adapt_args += ["--adapt-layouts", str(args.adapt_layouts)]
+            masks_dir += f"_l{args.adapt_layouts}"
+        if args.adapt_iterations:
+            adapt_args += ["--adapt-iterations", str(args.adapt_iterations)]
+            masks_dir += f"_i{args.adapt_iterations}"
     os.makedirs(os.path.join(args.out, "specs"), exist_ok=True)
     print("| scene | seed | vs masks/lens: IoU / precision | vs coverage >= 0.1: IoU / precision |")
     print("|---|---:|---|---|")
@@ -85,9 +98,9 @@ def main():
                 subprocess.run([args.weathergs, "--quiet", "weather", "--in", base, "--spec", spec_path, "--seed",
                                 str(seed), "--out", d, "--name", f"{scene}_rain", "--targets", "--no-manifest"],
                                check=True, stdout=subprocess.DEVNULL)
-            m = os.path.join(args.out, "masks_adapt" if args.adapt else "masks", f"{scene}_s{seed}")
+            m = os.path.join(args.out, masks_dir, f"{scene}_s{seed}")
             subprocess.run([args.weathergs, "--quiet", "detect", "--data", d, "--out", m]
-                           + (["--weights", args.weights] if args.weights else []) + (["--adapt"] if args.adapt else [])
+                           + (["--weights", args.weights] if args.weights else []) + adapt_args
                            + (["--save-attention"] if args.save_attention else []),
                            check=True, stdout=subprocess.DEVNULL)
             report = json.load(open(os.path.join(m, "detect.json")))

@@ -373,6 +373,13 @@ std::vector<Case> corpus() {
   // usage
   c.push_back({"usage: unknown command", {}, "frobnicate", "frobnicate", ""});
   c.push_back({"usage: unknown flag", {}, "train --data $D --out $T/run2 --bogus", "bogus", "run2"});
+  // the LED adaptation's length and layouts need the adaptation; a length it cannot run is named
+  c.push_back({"usage: detect --adapt-passes without --adapt", {}, "detect --data $D --out $T/ledmasks --adapt-passes 5",
+               "--adapt-passes requires --adapt", "ledmasks"});
+  c.push_back({"usage: reconstruct --led-adapt-layouts without --led-adapt", {},
+               "reconstruct --data $D --method weathergs-no-aef --out $T/ledrun --led-adapt-layouts 1",
+               "--led-adapt-layouts requires --led-adapt", "ledrun"});
+  c.push_back({"detect: zero adaptation passes", {}, "detect --data $D --out $T/ledmasks --adapt --adapt-passes 0", "passes", "ledmasks"});
   return c;
 }
 
