@@ -145,7 +145,7 @@ Command make(CLI::App& root) {
       ->needs(adapt);
   sub->add_option("--led-adapt-iterations", a->led_adapt_iterations,
                   "A fixed iteration count for --led-adapt (`detect --adapt-iterations`; default ~7 passes over the "
-                  "examples; 1 layout x 10 iterations: docs/restoration_led_adapted.md, \"At the speed aim\")")
+                  "examples; 1 layout x 10 iterations: docs/restoration_led_fast.md)")
       ->check(CLI::Range(1, 100000))
       ->needs(adapt);
   a->scoring.add_to(sub);
