@@ -111,7 +111,7 @@ Command make(CLI::App& root) {
                   "A fixed iteration count for --adapt's fine-tune instead of --adapt-passes (30 on a 14-view "
                   "dataset: ~3x sooner than the default 100, IoU ~0.005 lower on the validation scenes; "
                   "docs/restoration_led_adapted.md, \"Fewer still\")")
-      ->check(CLI::Range(1, 100000))
+      ->check(CLI::Range(1, study::kMaxAdaptIterations))
       ->excludes(passes)
       ->needs(adapt);
   sub->add_option("--adapt-layouts", a->adapt_options.layouts, "Drop layouts rendered over every training view by --adapt")

@@ -141,12 +141,12 @@ Command make(CLI::App& root) {
                     "docs/restoration_led_adapted.md)");
   sub->add_option("--led-adapt-layouts", a->led_adapt_layouts,
                   "Drop layouts of --led-adapt (`detect --adapt-layouts`; default 4)")
-      ->check(CLI::Range(1, 64))
+      ->check(CLI::Range(1, study::kMaxAdaptLayouts))
       ->needs(adapt);
   sub->add_option("--led-adapt-iterations", a->led_adapt_iterations,
                   "A fixed iteration count for --led-adapt (`detect --adapt-iterations`; default ~7 passes over the "
                   "examples; 1 layout x 10 iterations: docs/restoration_led_fast.md)")
-      ->check(CLI::Range(1, 100000))
+      ->check(CLI::Range(1, study::kMaxAdaptIterations))
       ->needs(adapt);
   a->scoring.add_to(sub);
   return {sub, [a] { return run(*a); }};

@@ -17,7 +17,6 @@
 namespace weathergs::study {
 namespace {
 
-constexpr int kMaxIterations = 100000;
 constexpr double kMaxPasses = 1000;
 
 // Where the base network's averaged map may hide the scene's own drops: m >= level, dilated with a
@@ -38,11 +37,12 @@ Image ignore_region(const Image& averaged, double level, int dilations) {
 }  // namespace
 
 void LedAdaptOptions::validate() const {
-  if (layouts < 1 || layouts > 64) throw InputError("LED adaptation layouts", "expected 1..64, got " + std::to_string(layouts));
+  if (layouts < 1 || layouts > kMaxAdaptLayouts)
+    throw InputError("LED adaptation layouts", "expected 1.." + std::to_string(kMaxAdaptLayouts) + ", got " + std::to_string(layouts));
   if (!(passes > 0 && passes <= kMaxPasses))
     throw InputError("LED adaptation passes", "expected in (0, " + std::to_string(int(kMaxPasses)) + "], got " + std::to_string(passes));
-  if (iterations && (*iterations < 1 || *iterations > kMaxIterations))
-    throw InputError("LED adaptation iterations", "expected 1.." + std::to_string(kMaxIterations) + ", got " + std::to_string(*iterations));
+  if (iterations && (*iterations < 1 || *iterations > kMaxAdaptIterations))
+    throw InputError("LED adaptation iterations", "expected 1.." + std::to_string(kMaxAdaptIterations) + ", got " + std::to_string(*iterations));
   if (!(learning_rate > 0 && learning_rate < 1))
     throw InputError("LED adaptation learning rate", "expected in (0, 1), got " + std::to_string(learning_rate));
   if (batch < 1 || batch > 64) throw InputError("LED adaptation batch", "expected 1..64, got " + std::to_string(batch));
@@ -56,10 +56,10 @@ void LedAdaptOptions::validate() const {
 int LedAdaptOptions::fine_tune_iterations(size_t train_views) const {
   if (iterations) return *iterations;
   const double n = std::round(passes * double(layouts) * double(train_views) / double(batch));
-  if (n > kMaxIterations)
+  if (n > kMaxAdaptIterations)
     throw InputError("LED adaptation", std::to_string(train_views) + " training views at " + std::to_string(passes) +
                                            " passes need " + std::to_string(int64_t(n)) + " iterations, over the " +
-                                           std::to_string(kMaxIterations) + " allowed: fix a count instead (detect --adapt-iterations)");
+                                           std::to_string(kMaxAdaptIterations) + " allowed: fix a count instead (detect --adapt-iterations)");
   return std::max(1, int(n));
 }
 

@@ -56,6 +56,9 @@ struct LedAdaptLayout {
 };
 inline constexpr LedAdaptLayout kAdaptLayouts[4] = {{"physical", 40}, {"paper", 30}, {"physical", 50}, {"paper", 20}};
 inline constexpr uint64_t kAdaptSeedBase = 9000;
+// The largest layouts and iterations LedAdaptOptions accepts (the commands check their flags with them).
+inline constexpr int kMaxAdaptLayouts = 64;
+inline constexpr int kMaxAdaptIterations = 100000;
 // The fine-tune's gradient: per example, so the adapted network does not depend on the thread count
 // (batched until 2026-11-29).
 inline constexpr restoration::LedGradient kAdaptGradient = restoration::LedGradient::kPerExample;
