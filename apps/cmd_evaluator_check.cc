@@ -11,6 +11,7 @@ namespace {
 struct CheckArgs {
   std::vector<std::string> baseline, results;
   evaluator::CheckTolerances tol;
+  bool allow_other_weights = false, allow_other_recipe = false;
   std::string json_output, tolerances_file;
   CLI::App* sub = nullptr;
 };
@@ -21,11 +22,18 @@ int run_check(CheckArgs args) {
     if (args.sub->count("--psnr-tol") == 0) args.tol.psnr = file.psnr;
     if (args.sub->count("--ssim-tol") == 0) args.tol.ssim = file.ssim;
     if (args.sub->count("--lpips-tol") == 0) args.tol.lpips = file.lpips;
+    args.tol.view_psnr = file.view_psnr;
+    args.tol.view_ssim = file.view_ssim;
+    args.tol.view_lpips = file.view_lpips;
   }
   std::vector<evaluator::LoadedResults> base, cur;
   for (const auto& p : args.baseline) base.push_back({p, evaluator::read_results(p)});
   for (const auto& p : args.results) cur.push_back({p, evaluator::read_results(p)});
-  evaluator::CheckReport report = evaluator::check_regression(base, cur, args.tol);
+  evaluator::CheckOptions o;
+  o.tolerances = args.tol;
+  o.allow_other_weights = args.allow_other_weights;
+  o.allow_other_recipe = args.allow_other_recipe;
+  evaluator::CheckReport report = evaluator::check_regression(base, cur, o);
   std::fputs(report.text.c_str(), stdout);
   if (!args.json_output.empty()) write_file_atomic(args.json_output, report.json.dump(2) + "\n");
   return report.passed ? kExitOk : kExitCheckFailed;
@@ -34,7 +42,9 @@ int run_check(CheckArgs args) {
 Command make_check(CLI::App& root) {
   auto args = std::make_shared<CheckArgs>();
   CLI::App* sub = root.add_subcommand(
-      "check", "Regression check: exit 1 if any metric got worse than the baseline by more than its tolerance");
+      "check", "Regression check: exit 1 if any metric got worse than the baseline by more than its tolerance (the means, "
+      "and every view with the per-view tolerances); exit 2 if the two are not comparable (protocol, ground truth, "
+      "weights, recipe)");
   sub->add_option("--baseline", args->baseline, "Baseline results JSON (repeatable)")->required();
   sub->add_option("--results", args->results, "New results JSON (repeatable)")->required();
   sub->add_option("--psnr-tol", args->tol.psnr, "Allowed PSNR drop in dB")->capture_default_str();
@@ -42,7 +52,13 @@ Command make_check(CLI::App& root) {
   sub->add_option("--lpips-tol", args->tol.lpips, "Allowed LPIPS rise")->capture_default_str();
   sub->add_option("--tolerances", args->tolerances_file,
                   "Tolerances file of the baseline ({\"psnr\", \"ssim\", \"lpips\", \"basis\"}, e.g. "
-                  "benchmarks/baselines/demo/tolerances.json); --*-tol flags override it");
+                  "benchmarks/baselines/regression/tolerances.json); --*-tol flags override it");
+  sub->add_flag("--allow-other-weights", args->allow_other_weights,
+                "Compare although the new results were made with other weights than the baseline records "
+                "(method_info.weights); refused (exit 2) otherwise");
+  sub->add_flag("--allow-other-recipe", args->allow_other_recipe,
+                "Compare although the recipe differs (method_info.method, method_description, iterations, schedule); "
+                "refused (exit 2) otherwise");
   sub->add_option("--json", args->json_output, "Also write the report as JSON to this file");
   args->sub = sub;
   return {sub, [args] { return run_check(*args); }};

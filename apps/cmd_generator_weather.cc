@@ -22,7 +22,7 @@ Command make_weather(CLI::App& root) {
   auto a = std::make_shared<WeatherArgs>();
   CLI::App* sub = root.add_subcommand(
       "weather",
-      "Render rain, snow and fog (weather spec, DATASET_FORMAT.md) into a clean dataset with depth. "
+      "Render rain, snow and fog (weather spec, docs/formats.md) into a clean dataset with depth. "
       "Writes images/, clean/, depth/, masks/particles/, layers/ (float alpha, fog transmittance, "
       "per-particle manifests) and dataset.json with the resolved spec, seed and stage timings. "
       "See docs/generator.md.");

@@ -79,8 +79,10 @@ Command make(CLI::App& root) {
   sub->add_option("--data", a->data, "Training datasets")->required();
   sub->add_option("--held-out", a->held_out, "Held-out datasets (scores; the selector's theta), never trained on");
   sub->add_option("--out", a->out, "Weights stem: writes <stem>.json and <stem>.bin")->required();
-  sub->add_option("--iterations", a->iterations, "Training iterations (default: plugins 5000, selector 1500)");
-  sub->add_option("--batch", a->batch, "Examples per iteration (default: plugins 8 crops, selector 16 views)");
+  sub->add_option("--iterations", a->iterations, "Training iterations (0 or unset: plugins 5000, selector 1500)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--batch", a->batch, "Examples per iteration (0 or unset: plugins 8 crops, selector 16 views)")
+      ->check(CLI::NonNegativeNumber);
   sub->add_option("--learning-rate", a->learning_rate, "Adam learning rate, cosine-decayed to 5% (default 0.002 / 0.003)");
   sub->add_option("--seed", a->seed, "Seed of the initialization and of the batch order")->capture_default_str();
   sub->add_option("--threads", a->threads, "libtorch threads (0 = all cores; 1 for reproducible weights)")->capture_default_str();

@@ -121,7 +121,9 @@ Command make(CLI::App& root) {
                   "Also score the test views at these iterations (comma-separated, e.g. 500,1000,2000): RUN/curve.json "
                   "holds accuracy against training seconds (docs/study.md)")
       ->delimiter(',');
-  sub->add_flag("--force", a->options.force, "Redo a complete run");
+  sub->add_flag("--force", a->options.force,
+                "Start the run over: remove what an earlier run left at --out (a complete run, or stages made with "
+                "other settings, which are refused otherwise)");
   sub->add_flag("--no-triangulate", a->no_triangulate,
                 "Never run COLMAP: without SfM points in the dataset, use the random initialization");
   sub->add_option("--colmap", a->options.colmap.executable, "COLMAP executable")->capture_default_str();

@@ -20,7 +20,7 @@ struct ScoringFlags {
     app->add_flag("--no-lpips", no_lpips, "Skip LPIPS (recorded as lpips: null in the protocol)");
     app->add_option("--lpips-model", lpips_model,
                     "LPIPS ONNX model (file or folder); default: $WEATHERGS_LPIPS_MODEL, then the install's "
-                    "share/weathergs/models/lpips, then ../shared/models/lpips");
+                    "share/weathergs/models/lpips (shipped with weathergs)");
     app->add_option("--ssim-padding", ssim_padding,
                     "SSIM border convention: valid (scikit-image, default) or same (zero padding, 3DGS)")
         ->check(CLI::IsMember({"valid", "same"}));

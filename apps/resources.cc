@@ -74,8 +74,6 @@ std::vector<std::string> lpips_model_search(const std::string& flag) {
   if (std::string e = env("WEATHERGS_LPIPS_MODEL"); !e.empty()) return {e};
   std::vector<std::string> out;
   for (const std::string& d : data_dirs()) out.push_back((fs::path(d) / "models" / "lpips").string());
-  out.push_back("shared/models/lpips");
-  out.push_back("../shared/models/lpips");
   return out;
 }
 

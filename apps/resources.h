@@ -32,8 +32,7 @@ std::string find_led_weights(const std::string& flag);
 std::string find_aef_weights(const std::string& flag);
 
 // Where to look for the LPIPS model, in order: `flag` alone if given, else $WEATHERGS_LPIPS_MODEL alone
-// if set, else models/lpips in the data directories, then ./shared/models/lpips and
-// ../shared/models/lpips (a project checkout).
+// if set, else models/lpips in the data directories (the repository's models/lpips is staged there).
 std::vector<std::string> lpips_model_search(const std::string& flag);
 
 // Cache of clean renders: `flag` if given, else $WEATHERGS_CACHE, $XDG_CACHE_HOME/weathergs,

@@ -36,12 +36,12 @@ void BM_Ssim(benchmark::State& state) {
 }
 void BM_Lpips(benchmark::State& state) {
   auto [a, b] = pair_600x400();
-  Lpips lpips(find_lpips_model({std::string(WEATHERGS_SOURCE_DIR) + "/../shared/models/lpips"}));
+  Lpips lpips(find_lpips_model({std::string(WEATHERGS_SOURCE_DIR) + "/models/lpips"}));
   for (auto _ : state) benchmark::DoNotOptimize(lpips.distance(a, b));
 }
 void BM_ScorePairProtocol(benchmark::State& state) {
   auto [a, b] = pair_600x400();
-  Lpips lpips(find_lpips_model({std::string(WEATHERGS_SOURCE_DIR) + "/../shared/models/lpips"}));
+  Lpips lpips(find_lpips_model({std::string(WEATHERGS_SOURCE_DIR) + "/models/lpips"}));
   ScoringOptions o;
   for (auto _ : state) benchmark::DoNotOptimize(score_pair(a, b, o, &lpips, nullptr, "bench"));
 }

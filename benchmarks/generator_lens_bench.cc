@@ -5,7 +5,7 @@
 // One 600x400 view (fx 520), the spec's default drops (60, radius 0.5-3 mm log-uniform, contact
 // angle 70 deg, glass at 3 cm). Error: RMSE (linear radiance) and PSNR against a 64-spp analytic
 // reference rendered with independent pixel noise (another view name, same drops), over the whole
-// view and over the pixels the reference shows water in. "defocus" uses DATASET_FORMAT.md's camera
+// view and over the pixels the reference shows water in. "defocus" uses docs/formats.md's camera
 // (f/2.8, 35 mm, focus 10 m); without it the camera is a pinhole.
 #include <benchmark/benchmark.h>
 

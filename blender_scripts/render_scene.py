@@ -10,7 +10,7 @@
 #                                            render.float_images: IMG/<view>.exr, scene-linear float32
 #        <output_dir>/DEPTH/<view>.exr       planar camera z, float32, R=G=B, background 65504 (EEVEE)
 # Folder names and the clip range come from the job: datagen/blender.cc owns them.
-#        <output_dir>/cameras.json           DATASET_FORMAT.md cameras, recomputed from Blender's camera
+#        <output_dir>/cameras.json           docs/formats.md cameras, recomputed from Blender's camera
 #        <output_dir>/render_log.json        timings and object counts
 #        <output_dir>/error.json             only on failure: {"where": "...", "what": "..."}
 # The layout and material parameters of the scene spec are validated here (unknown keys are errors);

@@ -80,6 +80,21 @@ void write_file_atomic(const std::string& path, const std::string& contents) {
   });
 }
 
+void check_writable_destination(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  fs::path p = fs::absolute(fs::path(path), ec).lexically_normal();
+  if (ec) throw InputError(path, what + ": cannot resolve the path: " + ec.message());
+  while (!p.empty() && !fs::exists(p, ec)) {
+    if (p == p.parent_path()) break;
+    p = p.parent_path();
+  }
+  if (!fs::is_directory(p, ec))
+    throw InputError(path, what + ": " + p.string() + " exists and is not a folder, so the output cannot be made there");
+  // access() answers for the real user, as the later writes will be made (root passes it anyway).
+  if (::access(p.c_str(), W_OK | X_OK) != 0)
+    throw InputError(path, what + ": the folder " + p.string() + " is not writable; choose another output or fix its permissions");
+}
+
 void copy_tree(const std::string& from, const std::string& to) {
   fs::create_directories(to);
   fs::copy(from, to, fs::copy_options::recursive | fs::copy_options::overwrite_existing);

@@ -19,6 +19,11 @@ void write_file_atomic(const std::string& path, const std::string& contents);
 // Copies the folder `from` into `to` recursively (created if needed; existing files are overwritten).
 void copy_tree(const std::string& from, const std::string& to);
 
+// Checks, before any work, that `path` can be made or written: the path itself, when it exists, must be
+// a writable folder, else its nearest existing ancestor must be one. InputError naming `what` and the
+// folder that refuses it.
+void check_writable_destination(const std::string& path, const std::string& what);
+
 // Reads a whole file; InputError if missing or unreadable.
 std::string read_file(const std::string& path);
 

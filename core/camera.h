@@ -1,4 +1,4 @@
-// Pinhole camera in OpenCV axes (x right, y down, z forward), DATASET_FORMAT.md conventions:
+// Pinhole camera in OpenCV axes (x right, y down, z forward), docs/formats.md conventions:
 // pixel origin at the top-left corner of the top-left pixel (pixel (i, j) has its center at
 // (i + 0.5, j + 0.5), as in COLMAP); u = fx * x/z + cx, v = fy * y/z + cy.
 #pragma once

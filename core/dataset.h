@@ -1,4 +1,4 @@
-// The on-disk dataset of DATASET_FORMAT.md: dataset.json + cameras.json + per-view image folders.
+// The on-disk dataset of docs/formats.md: dataset.json + cameras.json + per-view image folders.
 // Readers validate strictly: errors name the file, the JSON pointer and what was expected, and
 // unknown keys are errors.
 #pragma once

@@ -1,4 +1,4 @@
-// The folder layout of a dataset (../shared/docs/DATASET_FORMAT.md), spelled once. Every part and
+// The folder layout of a dataset (docs/formats.md), spelled once. Every part and
 // every script builds dataset paths from these names; blender_scripts/ receive theirs through the
 // job file that datagen writes.
 #pragma once

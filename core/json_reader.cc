@@ -28,6 +28,14 @@ Json read_json_file(const std::string& path) {
   }
 }
 
+std::string settings_mismatch(const Json& recorded, const Json& expected) {
+  for (const auto& [key, value] : expected.items()) {
+    const Json held = recorded.contains(key) ? recorded[key] : Json();
+    if (held != value) return key + ": holds " + held.dump() + ", asked for " + value.dump();
+  }
+  return "";
+}
+
 JsonReader::JsonReader(const Json& value, std::string file, std::string pointer)
     : value_(&value), file_(std::move(file)), pointer_(std::move(pointer)) {}
 

@@ -31,6 +31,11 @@ using Json = nlohmann::json;
 // Reads and parses a JSON file; syntax errors name the file, line and column.
 Json read_json_file(const std::string& path);
 
+// How a stage decides whether its output on disk is current: "" when `recorded` (the settings record
+// the stage wrote beside its output) holds every key of `expected` with the same value, else
+// "KEY: holds A, asked for B" for the first key that differs.
+std::string settings_mismatch(const Json& recorded, const Json& expected);
+
 class JsonReader {
  public:
   JsonReader(const Json& value, std::string file, std::string pointer = "");

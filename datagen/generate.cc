@@ -13,6 +13,7 @@
 #include "core/progress.h"
 #include "core/sha256.h"
 #include "datagen/exports.h"
+#include "datagen/process.h"
 #include "generator/weather.h"
 
 namespace weathergs::datagen {
@@ -84,6 +85,10 @@ std::string ensure_clean_render(const SceneSpec& scene, const std::string& varia
     return true;
   };
   if (hit()) return entry.string();
+  // A render is needed: Blender must be there before the lock is taken and any work starts.
+  if (find_executable(o.blender.executable).empty())
+    throw InputError(o.blender.executable, "Blender not found (is it installed? scripts/install-deps.sh installs it; "
+                                           "--blender PATH names another)");
   // One renderer per entry: concurrent generate runs (threads, processes, cluster jobs on a shared
   // file system) wait for the first one and then reuse its render.
   // Lock files live beside clean/, not in it: clean/ holds complete entries only.
@@ -117,6 +122,9 @@ GenerateSummary generate_variant(const std::string& scene_path, const std::strin
   const VariantSpec variant = scene.variant(variant_name);
   scene.profile(o.profile);  // fail on a bad profile before rendering
   const bool has_weather = variant.weather.is_object();
+  if (o.colmap && find_executable(o.colmap_options.executable).empty())
+    throw InputError(o.colmap_options.executable, "COLMAP not found (is it installed? scripts/install-deps.sh installs "
+                                                  "it; --colmap PATH names another, --no-colmap skips the SfM exports)");
 
   // Created first so that a bad --out fails before a long render.
   AtomicDirectory out(out_dir);

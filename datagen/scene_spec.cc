@@ -263,7 +263,7 @@ SceneSpec read_scene_spec(const std::string& path) {
     vs.lights = v.has("lights") ? read_lights(v.child("lights"), &s.lights) : s.lights;
     if (v.has("weather")) {
       JsonReader w = v.child("weather");
-      if (!w.is_object()) throw InputError(w.where(), "expected a weather spec object (DATASET_FORMAT.md)");
+      if (!w.is_object()) throw InputError(w.where(), "expected a weather spec object (docs/formats.md)");
       vs.weather = w.value();
     }
     v.finish();

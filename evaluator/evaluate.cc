@@ -33,6 +33,12 @@ MetricValues score_pair(const Image& render, const Image& gt, const ScoringOptio
     m.ssim = ssim(a, b, o.ssim, mask);
     if (o.lpips) {
       WGS_CHECK(lpips != nullptr);
+      if (mask) {  // masked: the excluded pixels of the render take the truth's values (Protocol::lpips_mask)
+        for (int y = 0; y < a.height; ++y)
+          for (int x = 0; x < a.width; ++x)
+            if (mask->at(x, y) >= 0.5f)
+              for (int c = 0; c < a.channels; ++c) a.at(x, y, c) = b.at(x, y, c);
+      }
       m.lpips = lpips->distance(a, b);
     }
   } catch (const InputError& e) {
@@ -57,6 +63,12 @@ void EvaluateOptions::validate() const {
       ground_truth != ImageKind::kTargetNoParticles && ground_truth != ImageKind::kTargetLensOnly)
     throw InputError(where, std::string("ground_truth is ") + to_string(ground_truth) +
                                 ": must be clean, images or a target (target_no_particles, target_lens_only)");
+}
+
+void check_scoring_resources(const ScoringOptions& options) {
+  if (!options.lpips) return;
+  const Lpips probe(find_lpips_model(options.lpips_model_search));
+  (void)probe;
 }
 
 Results evaluate(const EvaluateOptions& o) {
@@ -104,7 +116,10 @@ Results evaluate(const EvaluateOptions& o) {
   r.protocol.quantize_uint8 = o.scoring.quantize_uint8;
   r.protocol.split = o.split;
   if (o.ground_truth != ImageKind::kClean) r.protocol.ground_truth = folder_of(o.ground_truth);
-  if (o.mask_dir) r.protocol.mask = fs::path(*o.mask_dir).lexically_normal().filename().string();
+  if (o.mask_dir) {
+    r.protocol.mask = fs::path(*o.mask_dir).lexically_normal().filename().string();
+    r.protocol.lpips_mask = kLpipsTruthFilled;
+  }
 
   std::unique_ptr<Lpips> lpips;
   if (o.scoring.lpips) lpips = std::make_unique<Lpips>(find_lpips_model(o.scoring.lpips_model_search));

@@ -21,6 +21,10 @@ struct ScoringOptions {
   std::vector<std::string> lpips_model_search;  // where to look for the model, in order (lpips.h)
 };
 
+// Checks, before any long work, that scoring can run: with lpips on, the model is found and loads.
+// InputError listing where it looked and how to provide the model (or skip it with --no-lpips).
+void check_scoring_resources(const ScoringOptions& options);
+
 // Scores one pair (sRGB or linear, any 1..4 channels: converted to RGB sRGB first). `lpips` may be
 // null when options.lpips is false. `where` names the pair in errors.
 MetricValues score_pair(const Image& render, const Image& ground_truth, const ScoringOptions& options,

@@ -31,7 +31,7 @@ std::string find_lpips_model(const std::vector<std::string>& candidates) {
                    std::string("cannot find the LPIPS model ") + kLpipsModelFile + ". Searched:" +
                        (searched.empty() ? std::string(" nothing") : searched) +
                        "\nProvide it with --lpips-model PATH or the environment variable WEATHERGS_LPIPS_MODEL "
-                       "(the weights are in ../shared/models/lpips of the project checkout), or skip LPIPS "
+                       "(weathergs ships them as models/lpips, installed into share/weathergs/models/lpips), or skip LPIPS "
                        "explicitly with --no-lpips.");
 }
 

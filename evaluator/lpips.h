@@ -1,8 +1,8 @@
 // LPIPS v0.1 (Zhang et al. 2018) with the AlexNet trunk, run through OpenCV's dnn module from the
-// ONNX export in ../shared/models/lpips (see that README for the exact conventions).
+// ONNX export shipped in models/lpips (see its README for the exact conventions).
 //
 // The model is found by find_lpips_model over a list of candidate paths that the caller builds (the
-// `weathergs` binary: --lpips-model, $WEATHERGS_LPIPS_MODEL, its data directories, ../shared/models/lpips;
+// `weathergs` binary: --lpips-model, $WEATHERGS_LPIPS_MODEL, then its data directories;
 // apps/resources.h). A path may name the .onnx file or its folder.
 #pragma once
 

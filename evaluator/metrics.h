@@ -1,6 +1,6 @@
 // Full-reference image metrics: PSNR and SSIM (LPIPS is in lpips.h).
 //
-// Inputs are RGB images with values in [0, 1] (data range L = 1). Masks follow DATASET_FORMAT.md:
+// Inputs are RGB images with values in [0, 1] (data range L = 1). Masks follow docs/formats.md:
 // a 1-channel image where 1 means "effect present, exclude this pixel"; metrics are computed over the
 // remaining (valid) pixels only, never by multiplying the images by the mask.
 #pragma once

@@ -9,7 +9,8 @@ namespace weathergs::evaluator {
 
 std::string Protocol::to_string() const {
   return "ssim=" + ssim + " lpips=" + (lpips ? *lpips : "none") + " quantize_uint8=" +
-         (quantize_uint8 ? "true" : "false") + " split=" + split + " mask=" + (mask ? *mask : "none");
+         (quantize_uint8 ? "true" : "false") + " split=" + split + " mask=" + (mask ? *mask : "none") +
+         (mask ? " lpips_mask=" + (lpips_mask ? *lpips_mask : std::string("unmasked")) : std::string());
 }
 
 MetricValues mean_metrics(const std::vector<std::pair<std::string, MetricValues>>& per_view) {
@@ -72,6 +73,7 @@ Json results_to_json(const Results& r) {
                    {"split", r.protocol.split},
                    {"mask", r.protocol.mask ? Json(*r.protocol.mask) : Json(nullptr)}};
   if (r.protocol.ground_truth) protocol["ground_truth"] = *r.protocol.ground_truth;
+  if (r.protocol.lpips_mask) protocol["lpips_mask"] = *r.protocol.lpips_mask;
   Json j = {{"format", "weathergs-results"}, {"version", 1}, {"method", r.method}, {"dataset", r.dataset},
             {"scene", r.scene}, {"weather", r.weather}, {"protocol", protocol},
             {"metrics", metrics_to_json(r.metrics)}, {"per_view", per_view},
@@ -99,6 +101,10 @@ Results results_from_json(const JsonReader& r) {
   out.protocol.split = p.get<std::string>("split");
   out.protocol.mask = p.get_optional<std::string>("mask");
   out.protocol.ground_truth = p.get_optional<std::string>("ground_truth");
+  out.protocol.lpips_mask = p.get_optional<std::string>("lpips_mask");
+  if (out.protocol.lpips_mask && *out.protocol.lpips_mask != kLpipsTruthFilled)
+    throw InputError(p.where("lpips_mask"), "expected \"" + std::string(kLpipsTruthFilled) + "\", got \"" +
+                                                *out.protocol.lpips_mask + "\"");
   p.finish();
   out.metrics = metrics_from_json(r.child("metrics"));
   if (r.has("per_view")) {

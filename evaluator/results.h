@@ -1,4 +1,4 @@
-// The results format of DATASET_FORMAT.md ("weathergs-results", version 1), read strictly.
+// The results format of docs/formats.md ("weathergs-results", version 1), read strictly.
 //
 // PSNR of identical images is +infinity. JSON has no infinity, so it is written as
 // "psnr": null together with "psnr_infinite": true (documented in docs/evaluator.md); readers turn
@@ -20,6 +20,8 @@ struct MetricValues {
   std::optional<double> lpips;     // absent when LPIPS was skipped
 };
 
+inline constexpr const char* kLpipsTruthFilled = "truth_filled";
+
 struct Protocol {
   std::string ssim = "gaussian11_sigma1.5_valid";
   std::optional<std::string> lpips = std::string("alex_v0.1");  // nullopt: skipped (--no-lpips)
@@ -29,9 +31,13 @@ struct Protocol {
   // The dataset folder scored against when it is not clean/ (e.g. "targets/no_particles" to score a
   // particle filter); nullopt = clean/, the benchmark's ground truth. Optional in results.json.
   std::optional<std::string> ground_truth;
+  // How LPIPS treats the mask (a network sees whole images, not pixels): kLpipsTruthFilled, the masked
+  // pixels of the render replaced by the ground truth's, so that only valid pixels can differ. Written
+  // whenever `mask` is; absent in a masked result made before LPIPS was masked (it scored whole images).
+  std::optional<std::string> lpips_mask;
   bool operator==(const Protocol& o) const {
     return ssim == o.ssim && lpips == o.lpips && quantize_uint8 == o.quantize_uint8 && split == o.split &&
-           mask == o.mask && ground_truth == o.ground_truth;
+           mask == o.mask && ground_truth == o.ground_truth && lpips_mask == o.lpips_mask;
   }
   std::string to_string() const;
 };

@@ -3,7 +3,7 @@
 //   WeatherRunOptions options;                    // defaults documented below
 //   Json block = run_weather("clean/", JsonReader::from_file("weather.json"), "out/", options);
 //
-// Input: a dataset (DATASET_FORMAT.md) with clean images in clean/ (or images/) as PNG, planar depth
+// Input: a dataset (docs/formats.md) with clean images in clean/ (or images/) as PNG, planar depth
 // in depth/<view>.exr, and cameras with time_s and exposure_s. Output (written atomically through an
 // AtomicDirectory; a failed run leaves nothing at out_dir):
 //   images/<view>.png           the weathered views (8-bit sRGB)

@@ -1,4 +1,4 @@
-// The weather spec (DATASET_FORMAT.md, "Weather spec"), parsed strictly and resolved: every default
+// The weather spec (docs/formats.md, "Weather spec"), parsed strictly and resolved: every default
 // filled in, so that dataset.json records exactly what was simulated. Parameter tables with
 // defaults and units: docs/generator.md.
 #pragma once

@@ -80,7 +80,7 @@ struct RenderRunOptions {
   std::string split = "test";
   std::string out;            // renders folder (replaced atomically)
   std::string method = "3dgs";
-  bool depth = false;         // also write <out>/depth/<view>.exr (planar depth, DATASET_FORMAT.md)
+  bool depth = false;         // also write <out>/depth/<view>.exr (planar depth, docs/formats.md)
   // Depth pixels whose accumulated opacity is below this are background (+inf): the model is too
   // transparent there to say where the surface is.
   double depth_min_opacity = 0.5;

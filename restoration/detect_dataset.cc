@@ -197,14 +197,6 @@ Json detect_settings_json(const std::string& weights_sha256, const DetectDataset
               {"dilate_iterations", *m.dilate_iterations}};
 }
 
-std::string detect_settings_mismatch(const Json& report, const Json& expected) {
-  for (const auto& [key, value] : expected.items()) {
-    const Json held = report.contains(key) ? report[key] : Json();
-    if (held != value) return key + ": holds " + held.dump() + ", asked for " + value.dump();
-  }
-  return "";
-}
-
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& o) {
   o.mask.validate();
   if (o.batch < 1 || o.batch > 64) throw InputError("detect batch", "expected 1..64, got " + std::to_string(o.batch));

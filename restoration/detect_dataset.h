@@ -101,12 +101,9 @@ struct DetectDatasetReport {
 // The keys of detect.json that decide its masks, apart from the adaptation (whose report the adapt
 // hook writes): the weights' sha256, the images, the averaging and the post-processing `resolved`
 // (LedMaskOptions::resolved). detect_dataset writes them; a run that resumes compares them with
-// detect_settings_mismatch instead of detecting again (study/reconstruct).
+// settings_mismatch (core/json_reader.h) instead of detecting again (study/reconstruct).
 Json detect_settings_json(const std::string& weights_sha256, const DetectDatasetOptions& options,
                           const LedMaskOptions& resolved);
-// Empty when `report` (a detect.json) holds every key of `expected` (detect_settings_json) with the
-// same value; else "KEY: holds A, asked for B" for the first key that differs.
-std::string detect_settings_mismatch(const Json& report, const Json& expected);
 
 // Writes <out>/<view>.png for every view (255 = excluded from the loss, the dataset's mask convention)
 // and detect.json last, atomically. InputError names the dataset, view, weights or option.

@@ -90,6 +90,37 @@ const char* plugin_name(WeatherClass c) { return c == WeatherClass::kRain ? "der
 
 }  // namespace
 
+Json filter_settings_json(const FilterDatasetOptions& o, int width) {
+  Json j{{"method", to_string(o.method)},
+         {"task", to_string(o.task)},
+         {"input", o.input == ImageKind::kClean ? "clean" : "images"},
+         {"mode", to_string(o.mode)}};
+  if (!o.instruction.empty()) j["instruction"] = o.instruction;
+  if (o.method == FilterMethod::kTopHat)
+    j["parameters"] = {{"radius_px_at_300", o.filter.radius_px_at_300},
+                       {"radius_px", width > 0 ? o.filter.radius_px(width) : 0},
+                       {"threshold", o.filter.threshold},
+                       {"dilate_px", o.filter.dilate_px}};
+  else
+    j["parameters"] = {{"alpha_threshold", o.alpha_threshold}};
+  return j;
+}
+
+std::string filter_settings_mismatch(const Json& report, const FilterDatasetOptions& o, int width) {
+  if (std::string why = settings_mismatch(report, filter_settings_json(o, width)); !why.empty()) return why;
+  // The weight files, by their content: the same network in another folder is the same filter.
+  if (report.contains("weights"))
+    for (const auto& [stem, sha] : report.at("weights").items()) {
+      const std::string name = fs::path(stem).filename().string();
+      const fs::path manifest = fs::path(o.aef_weights) / (name + ".json");
+      const std::string now = fs::exists(manifest) ? read_json_file(manifest.string()).value("weights_sha256", "") : "";
+      if (now != sha.get<std::string>())
+        return "weights of " + name + ": holds sha256 " + sha.get<std::string>() + ", asked for " +
+               (now.empty() ? manifest.string() + " (missing)" : now);
+    }
+  return "";
+}
+
 FilterDatasetReport filter_dataset(const std::string& dataset, const std::string& out, const FilterDatasetOptions& o) {
   o.validate();
   const auto start = std::chrono::steady_clock::now();
@@ -174,24 +205,13 @@ FilterDatasetReport filter_dataset(const std::string& dataset, const std::string
     if (v.selected) j["cosine"] = cosines_json(v.cosine);
     views.push_back(j);
   }
-  Json j{{"format", "weathergs-filter"},
-         {"version", 2},
-         {"method", to_string(o.method)},
-         {"task", to_string(o.task)},
-         {"dataset", fs::absolute(dataset).lexically_normal().string()},
-         {"input", o.input == ImageKind::kClean ? "clean" : "images"},
-         {"mode", to_string(o.mode)},
-         {"seconds", report.seconds},
-         {"seconds_per_view", report.seconds / double(std::max<size_t>(1, ds.cameras.size()))},
-         {"views", views}};
-  if (!o.instruction.empty()) j["instruction"] = o.instruction;
-  if (o.method == FilterMethod::kTopHat)
-    j["parameters"] = {{"radius_px_at_300", o.filter.radius_px_at_300},
-                       {"radius_px", ds.cameras.empty() ? 0 : o.filter.radius_px(ds.cameras.front().width)},
-                       {"threshold", o.filter.threshold},
-                       {"dilate_px", o.filter.dilate_px}};
-  else
-    j["parameters"] = {{"alpha_threshold", o.alpha_threshold}};
+  Json j = filter_settings_json(o, ds.cameras.empty() ? 0 : ds.cameras.front().width);
+  j.update(Json{{"format", "weathergs-filter"},
+                {"version", 2},
+                {"dataset", fs::absolute(dataset).lexically_normal().string()},
+                {"seconds", report.seconds},
+                {"seconds_per_view", report.seconds / double(std::max<size_t>(1, ds.cameras.size()))},
+                {"views", views}});
   if (!models.files.empty()) j["weights"] = models.files;
   if (select) {
     j["selection"] = {{"scope", to_string(o.scope)},

@@ -76,6 +76,13 @@ struct FilterDatasetReport {
   double seconds = 0;
 };
 
+// The keys of filter.json that decide its images (method, task, input, mode, instruction, the
+// parameters; `width`: the dataset's, for the top-hat's radius). filter_dataset writes them.
+Json filter_settings_json(const FilterDatasetOptions& options, int width);
+// Whether a filter.json was made with `options`: "" if so, else the first difference ("KEY: holds A,
+// asked for B"), the weight files compared by sha256. How a resumed run decides to reuse its output.
+std::string filter_settings_mismatch(const Json& report, const FilterDatasetOptions& options, int width);
+
 // Every view of the dataset; `out` is written atomically with filter.json (method, task, weights,
 // per-view plugin, cosines, mask fraction, seconds). Every input and every weight file is checked
 // before anything is written; InputError names the dataset, view, file or option.

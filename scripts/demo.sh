@@ -27,6 +27,12 @@ Workflow: workflow/Snakefile (Snakemake; each line below is tagged with its cell
 EOF
 start=$(date +%s)
 cd "$ROOT"
+# Everything the demo needs, checked before Blender starts and before $OUT is made.
+if [ ! -x "$WGS" ]; then echo "demo: the weathergs binary $WGS does not exist; run 'make build' first" >&2; exit 2; fi
+if ! "$WGS" --quiet doctor --need lpips,led,aef,blender,blender-script,colmap,out --out "$OUT"; then
+  echo "demo: stopped before any work: a resource above is missing (nothing was written to $OUT)" >&2
+  exit 2
+fi
 mkdir -p "$OUT"
 USER=${USER:-weathergs} snakemake -s workflow/Snakefile --directory "$OUT" --cores 2 --config weathergs="$WGS" \
   scenes="$ROOT/scenes" out="$OUT" profile="$PROFILE" iterations="$ITERATIONS" threads=1 \

@@ -51,7 +51,7 @@ struct LedAdaptOptions {
 };
 
 struct LedAdaptLayout {
-  const char* style;  // "paper" or "physical" (generator styles, DATASET_FORMAT.md)
+  const char* style;  // "paper" or "physical" (generator styles, docs/formats.md)
   int count;          // drops on the glass
 };
 inline constexpr LedAdaptLayout kAdaptLayouts[4] = {{"physical", 40}, {"paper", 30}, {"physical", 50}, {"paper", 20}};
@@ -84,7 +84,7 @@ void use_adapted_peak_rule(restoration::LensDetector& led);
 // adapt_led's report holds them (the iteration count resolved, so `passes` and a fixed count that
 // agree are the same request), and its gradient mode (per-example, so the thread count does not
 // change the network and is not among them). A run that resumes compares them with
-// restoration::detect_settings_mismatch (study/reconstruct).
+// settings_mismatch (core/json_reader.h; study/reconstruct).
 Json adaptation_settings_json(const LedAdaptOptions& options, size_t train_views);
 
 // adapt_led with `options` as restoration::detect_dataset's adapt hook (`detect --adapt`,

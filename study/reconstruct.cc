@@ -33,6 +33,14 @@ bool has_points(const std::string& model_dir) {
   return fs::exists(p) && !read_colmap_points3d(p.string()).empty();
 }
 
+// The one rule for a stage output left by an earlier run (docs/study.md, "Resuming"): its settings
+// record must match what this run asks for, else the run is refused, naming the stage, the setting
+// and --force (which starts the run over), rather than mixing outputs of two recipes.
+InputError stale_stage(const fs::path& record, const std::string& stage, const std::string& why) {
+  return InputError(record.string(), "holds " + stage + " made with other settings than this run asks for (" + why +
+                                         "): pass --force to redo the run from scratch");
+}
+
 // Resuming: the run's detected/ must hold the masks this run asks for (weights, averaging, rule,
 // adaptation and its options), else the run would train on other masks than its options and
 // results.json say.
@@ -41,17 +49,57 @@ void check_resumed_masks(const fs::path& report_path, const restoration::DetectD
   const Json report = read_json_file(report_path.string());
   const bool adapted = !report.value("adaptation", Json()).is_null();
   if (adapted != adapt.has_value())
-    throw InputError(report_path.string(), std::string("holds LED masks made ") + (adapted ? "with" : "without") +
-                                               " --led-adapt, this run asks for them " + (adapted ? "without" : "with") +
-                                               " it: pass --force to redo the run");
+    throw stale_stage(report_path, "LED masks", std::string("made ") + (adapted ? "with" : "without") +
+                                                    " --led-adapt, asked for " + (adapted ? "without" : "with") + " it");
   restoration::LensDetector led = restoration::LensDetector::load(d.weights);
   if (adapt) use_adapted_peak_rule(led);
-  std::string why = restoration::detect_settings_mismatch(
+  std::string why = settings_mismatch(
       report, restoration::detect_settings_json(led.metadata().value("weights_sha256", ""), d, d.mask.resolved(led)));
-  if (why.empty() && adapt) why = restoration::detect_settings_mismatch(report.at("adaptation"), adaptation_settings_json(*adapt, train_views));
-  if (!why.empty())
-    throw InputError(report_path.string(), "holds LED masks made with other settings than this run asks for (" + why +
-                                               "): pass --force to redo the run");
+  if (why.empty() && adapt) why = settings_mismatch(report.at("adaptation"), adaptation_settings_json(*adapt, train_views));
+  if (!why.empty()) throw stale_stage(report_path, "LED masks", why);
+}
+
+void require_files(const std::vector<std::string>& paths, const std::string& what, const std::string& how) {
+  for (const std::string& p : paths)
+    if (!fs::is_regular_file(p)) throw InputError(p, what + " not found; " + how);
+}
+
+// The sha256 of every weight file the run's restoration stages used, from their own reports:
+// {"aef": {"selector": ..., "derain": ...}, "led": ...}. A regression check refuses to compare runs
+// made with other weights (evaluator/check.h).
+Json weights_record(const fs::path& run, const Recipe& r) {
+  Json w = Json::object();
+  const fs::path filter_report = run / kFilteredDir / restoration::kFilterReportFile;
+  if (r.particle_filter && fs::exists(filter_report)) {
+    const Json f = read_json_file(filter_report.string());
+    if (f.contains("weights")) {
+      Json aef = Json::object();
+      for (const auto& [stem, sha] : f.at("weights").items()) aef[fs::path(stem).filename().string()] = sha;
+      w["aef"] = aef;
+    }
+  }
+  const fs::path detect_report = run / kDetectedDir / restoration::kDetectReportFile;
+  if (r.lens_detector && fs::exists(detect_report))
+    w["led"] = read_json_file(detect_report.string()).value("weights_sha256", "");
+  return w;
+}
+
+// What the run will need, checked before it makes the run folder or starts any stage, so that a
+// missing resource costs seconds rather than a training run.
+void check_resources(const ReconstructOptions& o) {
+  check_writable_destination(o.out, "the run folder (--out)");
+  evaluator::check_scoring_resources(o.scoring);
+  const Recipe r = recipe(o.method);
+  if (r.lens_detector)
+    require_files({o.led_weights + ".json", o.led_weights + ".bin"}, "the Lens Effect Detector's weights",
+                  "pass --led-weights STEM or set WEATHERGS_LED_WEIGHTS (weathergs ships models/led/led)");
+  if (r.particle_filter && r.aef == restoration::FilterMethod::kLearned) {
+    std::vector<std::string> files;
+    for (const char* n : {"derain", "desnow", "selector"})
+      for (const char* ext : {".json", ".bin"}) files.push_back((fs::path(o.aef_weights) / (std::string(n) + ext)).string());
+    require_files(files, "the learned AEF's weights",
+                  "pass --aef-weights DIR or set WEATHERGS_AEF_WEIGHTS (weathergs ships models/aef)");
+  }
 }
 
 }  // namespace
@@ -82,16 +130,16 @@ void ReconstructOptions::validate() const {
 ReconstructResult reconstruct(const ReconstructOptions& o, const recon::IterationCallback& on_iteration,
                               const StageCallback& on_stage) {
   o.validate();
+  check_resources(o);
   auto stage = [&](const std::string& s) {
     if (on_stage) on_stage(s);
   };
   const Dataset ds = read_dataset(o.dataset);
   const fs::path run(o.out);
   const fs::path results_path = run / kResultsFile;
-  if (fs::exists(results_path)) {
-    if (!o.force) throw InputError(o.out, "already holds a complete run (results.json): pass --force to redo it");
-    fs::remove_all(run);
-  }
+  if (fs::exists(results_path) && !o.force)
+    throw InputError(o.out, "already holds a complete run (results.json): pass --force to redo it");
+  if (o.force) fs::remove_all(run);  // every stage starts over
   fs::create_directories(run);
   const Recipe r = recipe(o.method);
   ReconstructResult out;
@@ -131,8 +179,8 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   }
   if (out.initialization.empty()) out.initialization = "random (the dataset has no SfM points)";
 
-  // 2. Restoration: the classical AEF on every view (kept when an earlier run made it).
-  if (r.particle_filter && !fs::exists(run / kFilteredDir / restoration::kFilterReportFile)) {
+  // 2. Restoration: the AEF on every view (kept when an earlier run made it with these settings).
+  if (r.particle_filter) {
     restoration::FilterDatasetOptions f;
     f.filter = o.particle_filter;
     f.method = r.aef;
@@ -140,8 +188,15 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
       f.task = restoration::AefTask::kAuto;  // the selector decides, per scene, which plugin (or none)
       f.aef_weights = o.aef_weights;
     }
-    stage(std::string("filtering particles (AEF: ") + restoration::to_string(r.aef) + ") on every view");
-    restoration::filter_dataset(o.dataset, (run / kFilteredDir).string(), f);
+    const fs::path report = run / kFilteredDir / restoration::kFilterReportFile;
+    if (fs::exists(report)) {
+      const std::string why = restoration::filter_settings_mismatch(read_json_file(report.string()), f,
+                                                                    ds.cameras.empty() ? 0 : ds.cameras.front().width);
+      if (!why.empty()) throw stale_stage(report, "AEF images", why);
+    } else {
+      stage(std::string("filtering particles (AEF: ") + restoration::to_string(r.aef) + ") on every view");
+      restoration::filter_dataset(o.dataset, (run / kFilteredDir).string(), f);
+    }
   }
 
   // 2b. The LED on the raw views (method.h says why), averaged over the training views.
@@ -193,8 +248,12 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     bool trained = false;
     if (fs::exists(run_json)) {
       const Json j = read_json_file(run_json.string());
-      trained = j.value("format", "") == nerf::kNerfRunFormat && j.value("complete", false) &&
-                j.value("iterations", 0) == t.nerf.iterations;
+      if (j.value("format", "") != nerf::kNerfRunFormat) throw stale_stage(run_json, "a model", "format: not a radiance field");
+      if (j.value("complete", false)) {
+        if (const std::string why = settings_mismatch(j, Json{{"iterations", t.nerf.iterations}}); !why.empty())
+          throw stale_stage(run_json, "a radiance field", why);
+        trained = true;
+      }
     }
     t.force = !trained;  // no checkpoints: an incomplete radiance-field run starts over
     if (!trained) {
@@ -242,7 +301,10 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
     bool trained = false;
     if (fs::exists(run_json)) {
       const Json j = read_json_file(run_json.string());
-      trained = j.value("complete", false) && j.value("iterations", 0) == o.iterations;
+      // The trainer's whole options record: another length, seed or recipe is another model.
+      if (const std::string why = settings_mismatch(j.value("options", Json::object()), t.train.to_json()); !why.empty())
+        throw stale_stage(run_json, "a 3DGS model", "options." + why);
+      trained = j.value("complete", false);
       t.resume = !trained && fs::exists(run / kModelDir / "checkpoint.bin");
       t.force = !trained && !t.resume;
     }
@@ -275,6 +337,7 @@ ReconstructResult reconstruct(const ReconstructOptions& o, const recon::Iteratio
   out.results = evaluator::evaluate(e);
   out.results.method_info["initialization"] = out.initialization;
   out.results.method_info["method_description"] = method_description(o.method);
+  out.results.method_info["weights"] = weights_record(run, r);
   // Restoration time is part of a method's cost (Table IV): the AEF's and the LED's own reports.
   auto report_seconds = [&](const fs::path& report) {
     return fs::exists(report) ? read_json_file(report.string()).value("seconds", 0.0) : 0.0;

@@ -12,8 +12,12 @@
 //   curve.json          accuracy against training time: the test metrics at the `eval_at` iterations
 //                       (model/snapshots/) and at the end, with the training seconds to get there
 //   results.json        evaluator/results.h, written last: its presence means the run is complete
-// A run interrupted during training resumes from its checkpoint when started again with the same
-// options (same model, byte for byte); a complete run is refused unless `force` (then redone).
+// Resuming, one rule for every stage: each stage's output carries the settings record that made it
+// (filtered/filter.json, detected/detect.json, model/run.json). Started again, a run reuses each
+// output whose record matches what it asks for (training resumes from its checkpoint, to the same
+// model byte for byte) and refuses (InputError) an output made with other settings, naming the
+// stage, the setting and `force`. A complete run is refused unless `force`; `force` starts over.
+// Every resource the run needs (weights, LPIPS, a writable --out) is checked before any stage.
 #pragma once
 
 #include <string>
@@ -56,7 +60,7 @@ struct ReconstructOptions {
   // (the final model is always a point of the curve). Each must be >= 1. Radiance-field methods score
   // at the same fractions of their own run: it * nerf.iterations / iterations, rounded.
   std::vector<int> eval_at;
-  bool force = false;
+  bool force = false;  // remove what an earlier run left at `out` and start over
   PointsPolicy points = PointsPolicy::kAuto;
   datagen::ColmapOptions colmap;
   evaluator::ScoringOptions scoring;

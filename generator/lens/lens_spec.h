@@ -1,4 +1,4 @@
-// The `effects.lens_droplets` object of the weather spec (DATASET_FORMAT.md) and its documented
+// The `effects.lens_droplets` object of the weather spec (docs/formats.md) and its documented
 // extras (docs/lens_droplets.md). Parsing is strict: unknown keys and out-of-range values are
 // InputError naming the JSON pointer; every field below has a validated default.
 #pragma once

@@ -54,7 +54,7 @@ TEST(DatasetLayoutTest, CleanIfPresentElseImages) {
 }
 
 TEST(DatasetLayoutTest, BackgroundDepthHasOneDefinition) {
-  // DATASET_FORMAT.md: background is +inf or any value >= 1e9.
+  // docs/formats.md: background is +inf or any value >= 1e9.
   EXPECT_TRUE(is_background_depth(std::numeric_limits<float>::infinity()));
   EXPECT_TRUE(is_background_depth(1e9f));
   EXPECT_TRUE(is_background_depth(3e9f));

@@ -33,10 +33,8 @@ class TempDir {
   std::filesystem::path path_;
 };
 
-// Where tests look for the LPIPS weights: the project checkout's ../shared/models/lpips.
-inline std::vector<std::string> lpips_model_search() {
-  return {std::string(WEATHERGS_SOURCE_DIR) + "/../shared/models/lpips"};
-}
+// Where library tests look for the LPIPS weights: the copy the repository ships.
+inline std::vector<std::string> lpips_model_search() { return {std::string(WEATHERGS_SOURCE_DIR) + "/models/lpips"}; }
 
 // The Blender scene script of the source tree.
 inline std::string blender_script() { return std::string(WEATHERGS_SOURCE_DIR) + "/blender_scripts/render_scene.py"; }

@@ -189,6 +189,15 @@ TEST(GenerateTest, TinyRainVariantEndToEnd) {
   EXPECT_EQ(WEXITSTATUS(rc), 2);
   EXPECT_NE(read_file(tmp / "bad.log").find("no variant \"hail\""), std::string::npos);
   EXPECT_FALSE(fs::exists(tmp / "bad"));
+
+  // COLMAP failing on the weathered views (the clean render comes from the cache, so Blender does
+  // not run and the failure is COLMAP's own): no dataset is left, and the cache keeps its entry.
+  GenerateOptions failing = o;
+  failing.colmap_options.executable = "/bin/false";
+  const int entries = testing::count_entries(o.cache_dir + "/clean");
+  EXPECT_THROW(generate_variant(scene_path("pool.json"), "rain", tmp / "colmap_fails", failing), InputError);
+  EXPECT_FALSE(fs::exists(tmp / "colmap_fails"));
+  EXPECT_EQ(testing::count_entries(o.cache_dir + "/clean"), entries);
 }
 
 // Five 192x128 snowy views of pool share no feature COLMAP can triangulate, and COLMAP 3.8's
@@ -209,20 +218,28 @@ TEST(GenerateTest, TinySnowVariantGeneratesEvenWhenNothingTriangulates) {
   check_model(ds.file(layout::kSparseCleanModelDir), ds.cameras, o.colmap_options, 20);
 }
 
-TEST(GenerateTest, FailingColmapLeavesNoDataset) {
+// A missing tool is found before any work: no dataset, no cache entry, an error naming the tool.
+TEST(GenerateTest, MissingToolsStopGenerateBeforeAnyWork) {
   TempDir tmp;
   GenerateOptions o = tiny_options(tmp);
   o.colmap_options.executable = tmp / "no-colmap";
+  try {
+    generate_variant(scene_path("factory.json"), "clear", tmp / "out", o);
+    ADD_FAILURE() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("COLMAP not found"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(tmp / "out"));
+  o.colmap = false;
   o.blender.executable = tmp / "no-blender";
   try {
     generate_variant(scene_path("factory.json"), "clear", tmp / "out", o);
     ADD_FAILURE() << "expected an InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot run"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Blender not found"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(tmp / "out"));
-  // The cache holds no half-made entry either.
-  EXPECT_EQ(testing::count_entries(tmp / "cache/clean"), 0);
+  EXPECT_FALSE(fs::exists(tmp / "cache/clean") && testing::count_entries(tmp / "cache/clean") > 0);
 }
 
 }  // namespace

@@ -3,12 +3,16 @@
 // the weather generator accepts it (lens drops and rain). Bad inputs fail clearly and leave nothing.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "core/atomic_file.h"
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/image.h"
@@ -117,6 +121,32 @@ TEST(PhotoSceneTest, TheWeatherGeneratorAcceptsIt) {
   }
   EXPECT_GT(drops / (4 * 96 * 64), 0.02) << "30 drops of 0.5-1.5 mm at 15 mm cover part of every view";
   EXPECT_GT(changed / (4 * 96 * 64 * 3), 0.05) << "heavy paper-style rain changes the views";
+}
+
+// Through the binary, as a user runs it.
+TEST(PhotoSceneTest, TheCommandWritesADatasetAndRefusesBadInput) {
+  TempDir tmp;
+  const std::string photo = write_photo(tmp, 480, 320);
+  auto run = [&](const std::string& args) {
+    const int st = std::system((std::string(WEATHERGS_BINARY) + " --quiet photo-scene " + args + " > '" + (tmp / "p.log") +
+                                "' 2>&1")
+                                   .c_str());
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  };
+  ASSERT_EQ(run("--photo " + photo + " --out " + (tmp / "ds") + " --views 5 --width 96 --height 64"), 0)
+      << read_file(tmp / "p.log");
+  const Dataset ds = read_dataset(tmp / "ds");
+  EXPECT_EQ(ds.cameras.size(), 5u);
+  EXPECT_EQ(ds.info.name, "ds");
+  for (const Camera& c : ds.cameras) {
+    EXPECT_EQ(read_image(ds.path(ImageKind::kImages, c.name)).width, 96);  // a clear dataset: images/
+    EXPECT_TRUE(fs::exists(ds.path(ImageKind::kDepth, c.name)));
+  }
+  EXPECT_EQ(run("--photo " + (tmp / "none.png") + " --out " + (tmp / "ds2")), 2);
+  EXPECT_NE(read_file(tmp / "p.log").find("none.png"), std::string::npos) << read_file(tmp / "p.log");
+  EXPECT_EQ(run("--photo " + photo + " --out " + (tmp / "ds3") + " --zoom 0.5"), 2);
+  EXPECT_NE(read_file(tmp / "p.log").find("zoom"), std::string::npos) << read_file(tmp / "p.log");
+  EXPECT_FALSE(fs::exists(tmp / "ds2") || fs::exists(tmp / "ds3"));
 }
 
 TEST(PhotoSceneTest, BadInputsFailClearlyAndLeaveNothing) {

@@ -173,19 +173,44 @@ TEST_F(EvaluatorCli, NoLpipsIsRecorded) {
 
 TEST_F(EvaluatorCli, MaskedEvaluation) {
   TempDir dir;
-  // A mask over the whole image except one row: metrics must still be finite and recorded.
+  // Renders equal to the truth except for a black left half, and masks (255 = exclude) over that left
+  // half: the masked scores see a perfect render, the unmasked ones the damage. The reverse mask
+  // (the polarity inverted) sees only the damage.
+  fs::create_directories(dir / "renders");
   fs::create_directories(dir / "masks");
+  fs::create_directories(dir / "inverse");
   for (const char* v : {"000", "008"}) {
-    Image m(120, 80, 1, ColorSpace::kLinear, 0.f);
-    for (int x = 0; x < 60; ++x)
-      for (int y = 0; y < 80; ++y) m.at(x, y) = 1.f;
+    Image gt = read_image(ds() + "/clean/" + v + ".png");
+    Image m(gt.width, gt.height, 1, ColorSpace::kLinear, 0.f), inv(gt.width, gt.height, 1, ColorSpace::kLinear, 1.f);
+    for (int y = 0; y < gt.height; ++y)
+      for (int x = 0; x < gt.width / 2; ++x) {
+        for (int c = 0; c < gt.channels; ++c) gt.at(x, y, c) = 0.f;
+        m.at(x, y) = 1.f;
+        inv.at(x, y) = 0.f;
+      }
+    write_image(dir / (std::string("renders/") + v + ".png"), gt);
     write_mask(dir / (std::string("masks/") + v + ".png"), m);
+    write_mask(dir / (std::string("inverse/") + v + ".png"), inv);
   }
-  auto r = run_command(kBin + " --quiet evaluate --gt " + ds() + " --renders " + renders("noise") + " --mask-dir " +
-                       (dir / "masks") + " -o " + (dir / "r.json"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  Json j = read_json_file(dir / "r.json");
+  auto score = [&](const std::string& mask, const std::string& out) {
+    auto r = run_command(kBin + " --quiet evaluate --method half --gt " + ds() + " --renders " + (dir / "renders") +
+                         (mask.empty() ? "" : " --mask-dir " + (dir / mask)) + " -o " + (dir / out));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return read_json_file(dir / out);
+  };
+  const Json j = score("masks", "r.json"), whole = score("", "whole.json"), inverse = score("inverse", "inv.json");
   EXPECT_EQ(j["protocol"]["mask"], "masks");
+  EXPECT_EQ(j["protocol"]["lpips_mask"], "truth_filled");
+  EXPECT_FALSE(whole["protocol"].contains("lpips_mask"));
+  // Masked: the valid pixels are identical, so PSNR is infinite, SSIM ~1 and LPIPS 0.
+  EXPECT_EQ(j["metrics"]["psnr_infinite"], true) << j.dump();
+  EXPECT_GT(j["metrics"]["ssim"].get<double>(), 0.9);  // windows at the edge of the mask still see black
+  EXPECT_LT(j["metrics"]["lpips"].get<double>(), 1e-6);
+  // Unmasked: half the image is black.
+  EXPECT_LT(whole["metrics"]["psnr"].get<double>(), 15.0) << whole.dump();
+  EXPECT_GT(whole["metrics"]["lpips"].get<double>(), 0.2);
+  // Inverted polarity: only the black half counts, which is worse than the whole image.
+  EXPECT_LT(inverse["metrics"]["psnr"].get<double>(), whole["metrics"]["psnr"].get<double>());
   // A missing mask is an error naming it.
   fs::remove(dir / "masks/008.png");
   auto bad = run_command(kBin + " --quiet evaluate --gt " + ds() + " --renders " + renders("noise") + " --mask-dir " +

@@ -23,7 +23,7 @@ constexpr double kLpipsReferenceTol = 1e-4;
 constexpr double kPsnrReferenceTolDb = 1e-5;
 
 const std::string kData = WEATHERGS_TEST_DATA_DIR;
-const std::string kLpipsRef = std::string(WEATHERGS_SOURCE_DIR) + "/../shared/models/lpips/reference/";
+const std::string kLpipsRef = std::string(WEATHERGS_SOURCE_DIR) + "/models/lpips/reference/";
 
 Image constant(int w, int h, float v) { return Image(w, h, 3, ColorSpace::kSRGB, v); }
 

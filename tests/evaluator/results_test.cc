@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <cmath>
 #include <limits>
 
@@ -178,7 +180,7 @@ TEST(PaperTablesTest, SnowRainAblationAndCostWithReferenceLines) {
 
 TEST(CheckTest, PassesWithinToleranceFailsBeyond) {
   std::vector<LoadedResults> base = {{"base.json", make("wgs", "pool", "rain", 25.0, 0.85, 0.15)}};
-  CheckTolerances tol;
+  CheckOptions tol;
   // Within tolerance (0.1 dB drop, small SSIM drop, small LPIPS rise) and an improvement.
   std::vector<LoadedResults> ok = {{"new.json", make("wgs", "pool", "rain", 24.9, 0.847, 0.154)}};
   EXPECT_TRUE(check_regression(base, ok, tol).passed);
@@ -199,17 +201,79 @@ TEST(CheckTest, PassesWithinToleranceFailsBeyond) {
   EXPECT_FALSE(check_regression(base, other, tol).passed);
   worse[0].results.protocol.quantize_uint8 = false;
   EXPECT_THROW(check_regression(base, worse, tol), InputError);
-  tol.psnr = -1;
+  tol.tolerances.psnr = -1;
   EXPECT_THROW(check_regression(base, ok, tol), InputError);
+}
+
+Results with_views(Results r, const std::vector<std::pair<std::string, MetricValues>>& views) {
+  r.per_view = views;
+  r.metrics = mean_metrics(views);
+  return r;
+}
+
+TEST(CheckTest, EveryViewIsCheckedAsWellAsTheMean) {
+  const Results b = with_views(make("wgs", "pool", "rain", 0, 0, 0), {{"000", {25.0, 0.85, 0.15}}, {"001", {27.0, 0.88, 0.12}}});
+  std::vector<LoadedResults> base = {{"base.json", b}};
+  CheckOptions o;  // mean tolerance 0.2 dB, per view 2 x 0.2 = 0.4 dB
+  // The mean is within 0.2 dB, but view 001 fell by 0.6 dB (view 000 rose by 0.5).
+  std::vector<LoadedResults> shifted = {
+      {"new.json", with_views(b, {{"000", {25.5, 0.85, 0.15}}, {"001", {26.4, 0.88, 0.12}}})}};
+  CheckReport r = check_regression(base, shifted, o);
+  EXPECT_FALSE(r.passed) << r.text;
+  EXPECT_NE(r.text.find("view 001 PSNR"), std::string::npos) << r.text;
+  EXPECT_EQ(r.json["datasets"][0]["failed_views"].size(), 1u);
+  // A view the baseline scored but the new result lacks fails.
+  std::vector<LoadedResults> fewer = {{"new.json", with_views(b, {{"000", {25.0, 0.85, 0.15}}})}};
+  EXPECT_FALSE(check_regression(base, fewer, o).passed);
+  // Per-view tolerances from the tolerances file widen it.
+  o.tolerances.view_psnr = 0.7;
+  EXPECT_TRUE(check_regression(base, shifted, o).passed);
+}
+
+TEST(CheckTest, RefusesAnotherYardstickOtherWeightsOrAnotherRecipe) {
+  Results b = make("wgs", "pool", "rain", 25.0, 0.85, 0.15);
+  b.sha256_ground_truth = "aaaa";
+  b.method_info = {{"weights", {{"led", "1111"}}}, {"method_description", "recipe A"}, {"iterations", 1000}};
+  std::vector<LoadedResults> base = {{"base.json", b}};
+  auto variant = [&](const std::function<void(Results&)>& f) {
+    Results n = b;
+    f(n);
+    return std::vector<LoadedResults>{{"new.json", n}};
+  };
+  CheckOptions o;
+  EXPECT_TRUE(check_regression(base, variant([](Results&) {}), o).passed);
+  // A changed ground truth is an error, never a pass.
+  EXPECT_THROW(check_regression(base, variant([](Results& n) { n.sha256_ground_truth = "bbbb"; }), o), InputError);
+  // Other weights, another recipe or another length: refused unless allowed.
+  const auto other_weights = variant([](Results& n) { n.method_info["weights"]["led"] = "2222"; });
+  const auto other_recipe = variant([](Results& n) { n.method_info["method_description"] = "recipe B"; });
+  const auto longer = variant([](Results& n) { n.method_info["iterations"] = 2000; });
+  const auto unrecorded = variant([](Results& n) { n.method_info.erase("weights"); });
+  for (const auto* c : {&other_weights, &unrecorded}) {
+    try {
+      check_regression(base, *c, o);
+      ADD_FAILURE() << "accepted other weights";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--allow-other-weights"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(check_regression(base, other_recipe, o), InputError);
+  EXPECT_THROW(check_regression(base, longer, o), InputError);
+  o.allow_other_weights = true;
+  o.allow_other_recipe = true;
+  const CheckReport r = check_regression(base, other_weights, o);
+  EXPECT_TRUE(r.passed);
+  EXPECT_NE(r.text.find("other weights than the baseline (allowed)"), std::string::npos) << r.text;
+  EXPECT_TRUE(check_regression(base, other_recipe, o).passed);
 }
 
 TEST(CheckTest, InfinitePsnrComparesSanely) {
   const double inf = std::numeric_limits<double>::infinity();
   std::vector<LoadedResults> base = {{"b", make("m", "s", "w", inf, 1.0, 0.0)}};
   std::vector<LoadedResults> same = {{"n", make("m", "s", "w", inf, 1.0, 0.0)}};
-  EXPECT_TRUE(check_regression(base, same, {}).passed);
+  EXPECT_TRUE(check_regression(base, same, CheckOptions{}).passed);
   std::vector<LoadedResults> finite = {{"n", make("m", "s", "w", 60.0, 1.0, 0.0)}};
-  EXPECT_FALSE(check_regression(base, finite, {}).passed);
+  EXPECT_FALSE(check_regression(base, finite, CheckOptions{}).passed);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // fallback, bad input. On a small weathered synthetic street (tests/generator/test_scene.h).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 
@@ -62,6 +63,10 @@ ReconstructOptions options(const std::string& data, const std::string& out, Meth
   return o;
 }
 
+// The oracle's lead over the weathered 3DGS methods on this scene after 200 iterations: measured
+// 2.36-3.46 dB (robust-3dgs to gt-masks); the margin is half of the smallest.
+constexpr double kOracleMarginDb = 1.2;
+
 TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
   TempDir tmp;
   const std::string data = weathered_dataset(tmp);
@@ -116,13 +121,13 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
     EXPECT_GT(r.train_seconds, 0);
     psnr[m] = r.results.metrics.psnr;
   }
-  std::printf("test PSNR after 200 iterations: 3dgs %.2f, gt-masks %.2f, aef-tophat %.2f, oracle %.2f dB\n",
-              psnr[Method::k3dgs], psnr[Method::kGtMasks], psnr[Method::kAefTophat], psnr[Method::kOracle]);
+  for (const auto& [m, p] : psnr) std::printf("test PSNR (200 3DGS / 80 field iterations): %s %.2f dB\n", to_string(m), p);
   // The wall texture is value noise of ~2 px cells, so 200 iterations reach low absolute PSNR; what is
-  // checked is the order: the oracle trains on the ground truth itself and must beat the weathered run.
-  EXPECT_GT(psnr[Method::kOracle], psnr[Method::k3dgs]);
-  std::printf("radiance field after 80 iterations: nerf %.2f, nerf-oracle %.2f dB\n", psnr[Method::kNerf],
-              psnr[Method::kNerfOracle]);
+  // checked is the order that holds with margin here: the oracle trains on the ground truth itself and
+  // beats every 3DGS method that sees the weather by more than kOracleMarginDb.
+  for (const auto& [m, p] : psnr)
+    if (recipe(m).backend == Backend::k3dgs && m != Method::kOracle)
+      EXPECT_GT(psnr[Method::kOracle] - p, kOracleMarginDb) << to_string(m);
 }
 
 TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
@@ -231,27 +236,126 @@ TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   EXPECT_TRUE(fs::exists(run + "/results.json"));
 }
 
-TEST(ReconstructTest, WithoutPointsItTriangulatesIntoTheRunOrFallsBackWithAWarning) {
+TEST(ReconstructTest, WithoutPointsItTriangulatesIntoTheRun) {
   if (datagen::find_executable("colmap").empty()) GTEST_SKIP() << "colmap not installed";
   TempDir tmp;
   const std::string data = weathered_dataset(tmp);
   ReconstructOptions o = options(data, tmp / "run", Method::k3dgs);
   o.points = PointsPolicy::kAuto;
   o.colmap.num_threads = 2;
+  const ReconstructResult r = reconstruct(o);
+  std::printf("initialization: %s\n", r.initialization.c_str());
+  ASSERT_EQ(r.initialization.rfind("triangulated: ", 0), 0u) << r.initialization;
+  EXPECT_TRUE(fs::exists(tmp / "run/sparse/0/points3D.txt"));
+  EXPECT_NE(read_json_file(tmp / "run/model/run.json").at("initialization").get<std::string>().find("colmap:"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(data + "/sparse")) << "the dataset itself must stay untouched";
+}
+
+TEST(ReconstructTest, WhenColmapFailsItFallsBackToRandomPointsWithAWarning) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  ReconstructOptions o = options(data, tmp / "run", Method::k3dgs);
+  o.points = PointsPolicy::kAuto;
+  o.colmap.executable = "/bin/false";  // starts, then fails: what a broken COLMAP does
   std::vector<std::string> stages;
   const ReconstructResult r = reconstruct(o, {}, [&](const std::string& s) { stages.push_back(s); });
-  // Either COLMAP triangulated points into the run folder, or it found none and the run says so.
-  if (fs::exists(tmp / "run/sparse/0/points3D.txt") && r.initialization.rfind("triangulated", 0) == 0) {
-    EXPECT_NE(read_json_file(tmp / "run/model/run.json").at("initialization").get<std::string>().find("colmap:"),
-              std::string::npos);
-  } else {
-    EXPECT_EQ(r.initialization, "random (COLMAP found no points)");
-    bool warned = false;
-    for (const std::string& s : stages) warned |= s.find("warning: triangulation failed") != std::string::npos;
-    EXPECT_TRUE(warned);
-  }
-  std::printf("initialization: %s\n", r.initialization.c_str());
+  EXPECT_EQ(r.initialization, "random (COLMAP found no points)");
+  bool warned = false;
+  for (const std::string& s : stages) warned |= s.find("warning: triangulation failed") != std::string::npos;
+  EXPECT_TRUE(warned);
+  EXPECT_TRUE(fs::exists(tmp / "run/results.json"));
   EXPECT_FALSE(fs::exists(data + "/sparse")) << "the dataset itself must stay untouched";
+}
+
+// A resource the run needs is checked before any work: exit 2 within seconds, nothing at --out.
+TEST(ReconstructTest, AMissingResourceStopsTheRunBeforeAnyWork) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  struct Case {
+    std::string env, args, expect;
+  };
+  const std::vector<Case> cases = {
+      {"WEATHERGS_LPIPS_MODEL=" + (tmp / "no_lpips"), "--method weathergs", "LPIPS"},
+      {"WEATHERGS_LED_WEIGHTS=" + (tmp / "no_led"), "--method weathergs --no-lpips", "Lens Effect Detector"},
+      {"WEATHERGS_AEF_WEIGHTS=" + (tmp / "no_aef"), "--method weathergs --no-lpips", "AEF"},
+  };
+  for (size_t i = 0; i < cases.size(); ++i) {
+    const Case& c = cases[i];
+    SCOPED_TRACE(c.env);
+    const std::string out = tmp / ("run" + std::to_string(i)), log = tmp / ("r" + std::to_string(i) + ".log");
+    const auto t0 = std::chrono::steady_clock::now();
+    const int st = std::system(("env " + c.env + " " + WEATHERGS_BINARY + " --quiet reconstruct --data " + data + " " +
+                                c.args + " --iterations 100 --out " + out + " > '" + log + "' 2>&1")
+                                   .c_str());
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_EQ(WIFEXITED(st) ? WEXITSTATUS(st) : -1, 2) << read_file(log);
+    EXPECT_NE(read_file(log).find(c.expect), std::string::npos) << read_file(log);
+    EXPECT_LT(seconds, 20.0) << "the check must come before any long work";
+    EXPECT_FALSE(fs::exists(out)) << "nothing may be left at --out";
+  }
+  // An output that cannot be made: its parent is a file.
+  write_file_atomic(tmp / "a_file", "x");
+  EXPECT_EQ(run_cli("reconstruct --data " + data + " --method 3dgs --no-lpips --out " + (tmp / "a_file/run"), tmp / "f.log"), 2);
+  EXPECT_NE(read_file(tmp / "f.log").find("not a folder"), std::string::npos) << read_file(tmp / "f.log");
+}
+
+// One rule for every stage: an output left by an earlier run is reused when its settings record
+// matches, refused (naming the stage, the setting and --force) when it does not; --force starts over.
+TEST(ReconstructTest, EveryStageReusesOnlyOutputsMadeWithItsSettings) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  auto expect_refused = [](const ReconstructOptions& o, const std::string& stage, const std::string& setting) {
+    try {
+      reconstruct(o);
+      ADD_FAILURE() << "reused an output made with other settings (" << stage << ")";
+    } catch (const InputError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find(stage), std::string::npos) << m;
+      EXPECT_NE(m.find(setting), std::string::npos) << m;
+      EXPECT_NE(m.find("--force"), std::string::npos) << m;
+    }
+  };
+  auto stages_of = [](const ReconstructOptions& o) {
+    std::vector<std::string> stages;
+    reconstruct(o, {}, [&](const std::string& s) { stages.push_back(s); });
+    return stages;
+  };
+  auto ran = [](const std::vector<std::string>& stages, const std::string& prefix) {
+    for (const std::string& s : stages)
+      if (s.rfind(prefix, 0) == 0) return true;
+    return false;
+  };
+  // The AEF's images (filtered/): a run stopped after filtering, restarted with another threshold.
+  const ReconstructOptions tophat = options(data, tmp / "tophat", Method::kAefTophat);
+  reconstruct(tophat);
+  fs::remove(tmp / "tophat/results.json");
+  fs::remove_all(tmp / "tophat/model");
+  ReconstructOptions other_filter = tophat;
+  other_filter.particle_filter.threshold *= 2;
+  expect_refused(other_filter, "AEF images", "parameters");
+  EXPECT_FALSE(ran(stages_of(tophat), "filtering"));  // the same settings: reused
+  // The 3DGS model (model/): another seed is another model.
+  fs::remove(tmp / "tophat/results.json");
+  ReconstructOptions other_seed = tophat;
+  other_seed.seed = 3;
+  expect_refused(other_seed, "3DGS model", "options.seed");
+  ReconstructOptions longer = tophat;
+  longer.iterations = 250;
+  expect_refused(longer, "3DGS model", "options.iterations");
+  EXPECT_FALSE(ran(stages_of(tophat), "training"));  // complete with the same options: kept
+  // The radiance field (model/ of the nerf backend).
+  const ReconstructOptions field = options(data, tmp / "nerf", Method::kNerf);
+  reconstruct(field);
+  fs::remove(tmp / "nerf/results.json");
+  ReconstructOptions more = field;
+  more.nerf.iterations = 90;
+  expect_refused(more, "radiance field", "iterations");
+  // --force starts over, whatever was there.
+  other_seed.force = true;
+  const std::vector<std::string> forced = stages_of(other_seed);
+  EXPECT_TRUE(ran(forced, "filtering") && ran(forced, "training"));
+  EXPECT_EQ(read_json_file(tmp / "tophat/model/run.json").at("options").at("seed"), 3);
 }
 
 TEST(ReconstructTest, BadInputThroughTheCli) {
