@@ -7,6 +7,7 @@
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "core/sha256.h"
+#include "core/version.h"
 
 namespace weathergs::evaluator {
 
@@ -108,6 +109,7 @@ Results evaluate(const EvaluateOptions& o) {
   }
   if (r.method.empty())
     throw InputError(o.renders_dir, "no method name: pass --method NAME or put \"method\" in info.json");
+  r.method_info["weathergs_commit"] = source_commit();  // the code that scored (and, in a run, made) it
   r.dataset = ds.info.name;
   r.scene = ds.info.scene;
   r.weather = ds.info.weather;

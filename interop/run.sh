@@ -7,7 +7,8 @@
 # 3. @mkkellogg/gaussian-splats-3d (Three.js) in headless Chromium renders the model from each test
 #    camera, compared with weathergs' render (PSNR >= 25 dB);
 # 4. the HTML leaderboard of the example benchmark in headless Chromium: screenshot, DOM numbers ==
-#    results files.
+#    results files;
+# 5. the results browser (`weathergs report`) of a small `make demo` in headless Chromium.
 # Prints one JSON report per check and writes OUT/report.json (default BUILD/interop). Exit 0 only
 # when every check passed.
 set -euo pipefail
@@ -65,13 +66,26 @@ done
 node leaderboard_check.mjs "$OUT/leaderboard.html" "$OUT/leaderboard" "${results[@]}" > "$OUT/leaderboard.json" || status=1
 cat "$OUT/leaderboard.json"; echo
 
+# 5. The results browser made from the demo's output (`make demo` small: scripts/demo.sh, which ends
+#    with `weathergs report`): images, links, numbers against the results files, sorting, the zoom;
+#    a full-page screenshot (docs/images/report.png is one).
+if command -v blender >/dev/null && command -v colmap >/dev/null; then
+  DEMO_ITERATIONS=${INTEROP_DEMO_ITERATIONS:-300} WEATHERGS_CACHE="$BUILD/interop-cache" \
+    bash "$HERE/../scripts/demo.sh" "$W" "$OUT/demo" > "$OUT/demo.log" 2>&1 || { echo "interop: the demo failed"; tail -30 "$OUT/demo.log"; status=1; }
+  node report_check.mjs "$OUT/demo/report" "$OUT/demo" "$OUT/report.png" > "$OUT/report_page.json" || status=1
+else
+  echo '{"ok": false, "problems": ["blender and colmap are needed to make the demo the results browser is checked on"]}' > "$OUT/report_page.json"
+  status=1
+fi
+cat "$OUT/report_page.json"; echo
+
 node -e '
 const fs = require("fs"); const [out, kind, iter, st] = process.argv.slice(1);
 const read = (f) => JSON.parse(fs.readFileSync(f, "utf8"));
 const viewers = fs.readdirSync(out).filter((f) => /^viewer_.*\.json$/.test(f)).map((f) => read(`${out}/${f}`));
 const report = { dataset: kind, iterations: Number(iter), node: process.version,
   splat_transform: read(`${out}/splat_transform.json`), viewer: viewers.map(({ console: _, ...v }) => v),
-  leaderboard: read(`${out}/leaderboard.json`), ok: st === "0" };
+  leaderboard: read(`${out}/leaderboard.json`), report_page: read(`${out}/report_page.json`), ok: st === "0" };
 fs.writeFileSync(`${out}/report.json`, JSON.stringify(report, null, 2));
 console.log(`interop: ${report.ok ? "all checks passed" : "FAILED"} (${out}/report.json); viewer PSNR: ` +
   viewers.map((v) => `${v.view} ${v.compare.psnr.toFixed(2)} dB${v.min_psnr > 0 ? " (test view)" : ""}`).join(", "));

@@ -41,3 +41,6 @@ echo
 cat "$OUT/tables.md"
 echo "Done in $(( $(date +%s) - start )) s. Tables: $OUT/tables.md (csv: tables.csv), per-scene" \
   "leaderboard: $OUT/leaderboard.html, runs and renders: $OUT/runs/, logs: $OUT/logs/."
+echo
+echo "The results browser (renders beside the weather and the truth, curves, cost; opens offline):"
+echo "  open $OUT/report/index.html"

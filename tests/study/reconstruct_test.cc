@@ -126,8 +126,9 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
   // checked is the order that holds with margin here: the oracle trains on the ground truth itself and
   // beats every 3DGS method that sees the weather by more than kOracleMarginDb.
   for (const auto& [m, p] : psnr)
-    if (recipe(m).backend == Backend::k3dgs && m != Method::kOracle)
+    if (recipe(m).backend == Backend::k3dgs && m != Method::kOracle) {
       EXPECT_GT(psnr[Method::kOracle] - p, kOracleMarginDb) << to_string(m);
+    }
 }
 
 TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {

@@ -33,6 +33,7 @@ TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
   const std::string md = read_file(out + "/leaderboard.md");
   for (const char* m : {"3dgs", "oracle"}) EXPECT_NE(md.find(m), std::string::npos) << md;
   EXPECT_TRUE(fs::exists(out + "/leaderboard.html"));
+  EXPECT_TRUE(fs::exists(out + "/report/index.html") && fs::exists(out + "/report/data.js"));  // the results browser
   const std::string tables = read_file(out + "/tables.md");  // leaderboard --paper
   EXPECT_NE(tables.find("## Table I: Rain"), std::string::npos) << tables;
   EXPECT_NE(tables.find("| oracle (reference) |"), std::string::npos) << tables;

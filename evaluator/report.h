@@ -1,0 +1,44 @@
+// The results browser (`weathergs report SUITE_DIR -o REPORT_DIR`): a static site that opens from the
+// file system, with no server and no network. From a suite folder (runs/<variant>/<method>/seed<S>/
+// with results.json, renders/test/, curve.json and, for methods with the LED, detected/; data/<variant>/
+// with the datasets) it writes:
+//   REPORT_DIR/index.html, report.css, report.js   the page (evaluator/report_page/, embedded)
+//   REPORT_DIR/data.js                             every number the page shows (window.WEATHERGS_REPORT)
+//   REPORT_DIR/img/<variant>/<view>/               thumbnails (JPEG), full-size copies (PNG), absolute
+//                                                  difference heat maps, mask overlays (RGBA PNG)
+// Browsers refuse fetch() under file://, so the data is a script the page includes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace weathergs::evaluator {
+
+struct ReportOptions {
+  std::string suite_dir;  // the workflow's output folder: runs/ and data/
+  std::string out_dir;    // written atomically (replaced as a whole)
+  int thumb_width = 200;  // thumbnails' width in pixels (the height keeps the aspect ratio)
+  // Shown under provenance: the command that made the report, and weight files the runs do not
+  // record themselves (the LPIPS model): name -> sha256.
+  std::string command;
+  std::vector<std::pair<std::string, std::string>> extra_weights;
+  void validate() const;  // InputError naming the field
+};
+
+struct ReportSummary {
+  int variants = 0, runs = 0, views = 0, images = 0;
+  int64_t bytes = 0;  // the whole REPORT_DIR
+  std::string index;  // REPORT_DIR/index.html
+};
+
+// InputError (naming the folder or file) when the suite has no runs, a run's results or renders are
+// missing or unreadable, or a variant's dataset is absent.
+ReportSummary write_report(const ReportOptions& options);
+
+// The 95% confidence interval's half-width of a mean over n values with sample standard deviation
+// s: t(0.975, n - 1) s / sqrt(n) (Student's t; 0 for n < 2).
+double confidence_half_width_95(int n, double sample_std);
+
+}  // namespace weathergs::evaluator

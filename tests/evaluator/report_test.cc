@@ -1,0 +1,124 @@
+// `weathergs report` without a browser: the page's embedded data (data.js) holds exactly the numbers
+// of the results files, every image it names exists, and bad suites are refused. The page itself is
+// checked in headless Chromium by `make interop` (interop/report_check.mjs).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "core/json_reader.h"
+#include "evaluator/report.h"
+#include "evaluator/results.h"
+#include "tests/core/test_util.h"
+
+namespace weathergs::evaluator {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::run_command;
+using testing::TempDir;
+
+const std::string kBin = WEATHERGS_BINARY;
+
+// A suite folder as the workflow writes it, from the example benchmark: data/<variant>/ and
+// runs/<variant>/<method>/seed<S>/ with renders/test/ and results.json (scored by the binary).
+std::string make_suite(const TempDir& tmp) {
+  const std::string ex = tmp / "ex", suite = tmp / "suite";
+  auto r = run_command(kBin + " --quiet example -o " + ex);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* variant : {"park_rain", "park_snow"}) {
+    copy_tree(ex + "/datasets/" + variant, suite + "/data/" + variant);
+    int seed = 0;
+    for (const char* method : {"box-blur", "noise", "noise"}) {  // noise twice: two seeds of one method
+      const std::string run = suite + "/runs/" + variant + "/" + method + "/seed" + std::to_string(seed++);
+      copy_tree(ex + "/renders/" + method + "/" + variant, run + "/renders/test");
+      r = run_command(kBin + " --quiet evaluate --gt " + suite + "/data/" + variant + " --renders " + run +
+                      "/renders/test -o " + run + "/results.json");
+      EXPECT_EQ(r.exit_code, 0) << r.output;
+    }
+  }
+  return suite;
+}
+
+Json read_data_js(const std::string& report) {
+  const std::string js = read_file(report + "/data.js");
+  const std::string prefix = "window.WEATHERGS_REPORT = ";
+  EXPECT_EQ(js.rfind(prefix, 0), 0u);
+  return Json::parse(js.substr(prefix.size(), js.rfind(';') - prefix.size()));
+}
+
+TEST(Report, EmbeddedDataEqualsTheResultsFiles) {
+  TempDir tmp;
+  const std::string suite = make_suite(tmp), report = tmp / "report";
+  auto r = run_command(kBin + " --quiet report " + suite + " -o " + report);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(report + "/index.html"), std::string::npos) << r.output;
+  for (const char* f : {"index.html", "report.css", "report.js", "data.js"}) EXPECT_TRUE(fs::exists(report + "/" + f)) << f;
+  const Json d = read_data_js(report);
+  EXPECT_EQ(d.at("format"), "weathergs-report");
+  ASSERT_EQ(d.at("variants").size(), 2u);
+  int checked = 0;
+  for (const Json& v : d.at("variants")) {
+    // Columns: the input, every run, the truth.
+    ASSERT_EQ(v.at("columns").size(), 5u) << v.at("columns").dump();
+    EXPECT_EQ(v.at("columns").front().at("id"), "input");
+    EXPECT_EQ(v.at("columns").back().at("id"), "gt");
+    for (const Json& view : v.at("views")) {
+      for (const auto& [column, cell] : view.at("cells").items()) {
+        for (const char* k : {"thumb", "full", "diff"})
+          if (cell.contains(k)) {
+            EXPECT_TRUE(fs::exists(report + "/" + cell.at(k).get<std::string>())) << cell.at(k);
+          }
+        if (column == "input" || column == "gt") continue;
+        // The per-view numbers are the results file's, bit for bit.
+        const std::string method = column.substr(0, column.find('/')), seed = column.substr(column.find('/') + 1);
+        const Json res = read_json_file(suite + "/runs/" + v.at("name").get<std::string>() + "/" + method + "/" + seed + "/results.json");
+        const Json& truth = res.at("per_view").at(view.at("name").get<std::string>());
+        for (const char* m : {"psnr", "ssim", "lpips"}) {
+          EXPECT_EQ(cell.at("metrics").at(m), truth.at(m)) << column << " " << m;
+          ++checked;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(checked, 2 * 2 * 3 * 3);  // variants x test views x runs x metrics
+  // The leaderboard: one table per weather, the two seeds of `noise` as mean ± interval.
+  bool interval = false;
+  for (const Json& t : d.at("tables"))
+    for (const Json& row : t.at("rows"))
+      for (const auto& [key, cell] : row.at("cells").items())
+        if (row.at("method") == "noise" && cell.contains("ci95")) interval = true;
+  EXPECT_TRUE(interval);
+  EXPECT_FALSE(d.at("provenance").at("commit").get<std::string>().empty());
+  EXPECT_EQ(d.at("provenance").at("datasets").size(), 2u);
+  // A report of this size stays small.
+  uintmax_t bytes = 0;
+  for (const auto& e : fs::recursive_directory_iterator(report))
+    if (e.is_regular_file()) bytes += e.file_size();
+  EXPECT_LT(bytes, 5u << 20);
+}
+
+TEST(Report, ConfidenceIntervalsUseStudentsT) {
+  EXPECT_DOUBLE_EQ(confidence_half_width_95(1, 1.0), 0.0);
+  EXPECT_NEAR(confidence_half_width_95(2, 1.0), 12.706 / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(confidence_half_width_95(3, 0.5), 4.303 * 0.5 / std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(confidence_half_width_95(100, 1.0), 1.96 / 10, 1e-12);
+}
+
+TEST(Report, BadSuitesAreRefusedAndLeaveNothing) {
+  TempDir tmp;
+  auto r = run_command(kBin + " --quiet report " + (tmp / "none") + " -o " + (tmp / "rep"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("runs"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp / "rep"));
+  const std::string suite = make_suite(tmp);
+  fs::remove_all(suite + "/data/park_snow");
+  r = run_command(kBin + " --quiet report " + suite + " -o " + (tmp / "rep"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("park_snow"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(tmp / "rep"));
+}
+
+}  // namespace
+}  // namespace weathergs::evaluator
