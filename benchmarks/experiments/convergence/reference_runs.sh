@@ -6,7 +6,8 @@
 # Usage: reference_runs.sh WEATHERGS_BINARY DATA_DIR RUNS_DIR CELL...
 #   CELL = <dataset folder name under DATA_DIR>:<method>, e.g. station_rain:oracle
 # Writes RUNS_DIR/<cell>/ (the run) and, when it completes, benchmarks/baselines/convergence/<cell>.json:
-# R (final and best test PSNR / SSIM / LPIPS), C (training seconds), the Gaussian count, the command.
+# R (final and best test PSNR / SSIM / LPIPS), C (training seconds), the Gaussian count, the command,
+# and how the machine was shared while it ran (TIMING_NOTE: C is only comparable under the same).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
 BIN=$(realpath "${1:?usage: reference_runs.sh WEATHERGS_BINARY DATA_DIR RUNS_DIR CELL...}")
@@ -23,15 +24,16 @@ for cell in "$@"; do
     echo "== $name: ${cmd[*]}"
     "${cmd[@]}"
   fi
-  /usr/bin/python3 - "$out" "$ROOT/benchmarks/baselines/convergence/$name.json" "$data" "$method" "${cmd[*]}" <<'PY'
+  /usr/bin/python3 - "$out" "$ROOT/benchmarks/baselines/convergence/$name.json" "$data" "$method" "${cmd[*]}" \
+    "${TIMING_NOTE:-one thread per run (--threads 1), two runs at a time on the 2-core machine}" <<'PY'
 import json, sys
-run, dst, data, method, cmd = sys.argv[1:]
+run, dst, data, method, cmd, timing = sys.argv[1:]
 res = json.load(open(f"{run}/results.json"))
 curve = json.load(open(f"{run}/curve.json"))["points"]
 best = max(curve, key=lambda p: p["psnr"])
 m = res["method_info"]
 out = {"cell": f"{data}:{method}", "command": cmd.replace(run, "RUN"),
-       "timing": "one thread per run (--threads 1), two runs at a time on the 2-core machine",
+       "timing": timing,
        "R": {"final": res["metrics"], "best": {k: best[k] for k in ("iteration", "psnr", "ssim", "lpips")}},
        "C_train_seconds": m.get("train_seconds"), "num_gaussians": m.get("num_gaussians"),
        "iterations": m.get("iterations"), "weathergs_commit": m.get("weathergs_commit"),
