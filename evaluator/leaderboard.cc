@@ -84,6 +84,11 @@ std::string html_escape(const std::string& s) {
   return o;
 }
 
+// Upper bounds and ground-truth-assisted runs: shown, never ranked (study/method.h).
+bool is_reference_method(const std::string& method) {
+  return method == "oracle" || method == "gt-masks" || method == "nerf-oracle";
+}
+
 std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results) {
   if (results.empty()) throw InputError("leaderboard", "no results files given");
   std::vector<std::string> weathers;
@@ -130,6 +135,8 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
       }
       t.average[m] = avg;
     }
+    t.reference.resize(t.methods.size());
+    for (size_t m = 0; m < t.methods.size(); ++m) t.reference[m] = is_reference_method(t.methods[m]);
     tables.push_back(std::move(t));
   }
   return tables;

@@ -42,6 +42,10 @@ struct LeaderboardTable {
   Protocol protocol;
 };
 
+// oracle (3DGS on the clean images), nerf-oracle and gt-masks (ground-truth masks): bounds, not
+// competitors. Every table marks them as reference lines: shown, never in bold.
+bool is_reference_method(const std::string& method);
+
 // Groups results into tables. Results in one table must share a protocol (InputError naming files).
 std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results);
 std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format);

@@ -9,11 +9,6 @@
 
 namespace weathergs::evaluator {
 
-// Upper bounds and ground-truth-assisted runs: shown, never ranked (study/method.h).
-bool is_reference_method(const std::string& method) {
-  return method == "oracle" || method == "gt-masks" || method == "nerf-oracle";
-}
-
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();

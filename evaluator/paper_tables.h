@@ -15,9 +15,6 @@
 
 namespace weathergs::evaluator {
 
-// oracle (3DGS on the clean images) and gt-masks (ground-truth masks): bounds, not competitors.
-bool is_reference_method(const std::string& method);
-
 // One method's cost, the mean over its runs (all variants and seeds) of the numbers its results
 // files record in method_info (study/reconstruct.cc); a number no run records is NaN (printed "–").
 struct CostRow {

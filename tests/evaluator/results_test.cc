@@ -101,6 +101,22 @@ TEST(LeaderboardTest, TablesPerWeatherBestAndAverage) {
   EXPECT_EQ(html.find("<script src"), std::string::npos);
 }
 
+// The oracle is an upper bound, not a competitor: every format shows it as a reference line and
+// never bolds it, as the paper's tables do.
+TEST(LeaderboardTest, TheOracleIsAReferenceLineInEveryFormat) {
+  std::vector<LoadedResults> rs = {{"a", make("3dgs", "pool", "rain", 24.0, 0.80, 0.30)},
+                                   {"b", make("oracle", "pool", "rain", 31.0, 0.90, 0.10)}};
+  const auto tables = build_leaderboard(rs);
+  ASSERT_EQ(tables.size(), 1u);
+  const std::string md = render_leaderboard(tables, TableFormat::kMarkdown);
+  const std::string html = render_leaderboard(tables, TableFormat::kHtml);
+  EXPECT_NE(md.find("oracle (reference)"), std::string::npos) << md;
+  EXPECT_EQ(md.find("**31.00**"), std::string::npos) << md;
+  EXPECT_NE(md.find("**24.00**"), std::string::npos) << md;
+  EXPECT_EQ(html.find("<b>31.00</b>"), std::string::npos) << html;
+  EXPECT_NE(html.find("<b>24.00</b>"), std::string::npos) << html;
+}
+
 TEST(LeaderboardTest, RepeatedRunsShowSpreadAndProtocolsMustMatch) {
   std::vector<LoadedResults> rs = {{"s1", make("3dgs", "pool", "rain", 20.0, 0.7, 0.3)},
                                    {"s2", make("3dgs", "pool", "rain", 22.0, 0.7, 0.3)}};
