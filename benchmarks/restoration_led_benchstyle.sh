@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The LED trained with the benchmark's weather on the training scenes (issue 11; measured, not
+# The LED trained with the benchmark's weather on the training scenes (measured, not
 # adopted: docs/restoration_led_targets.md, "The benchmark's weather on the training scenes" and
 # "The shipped training set with the benchmark's weather added").
 #

@@ -25,7 +25,7 @@ import sys
 import numpy as np
 
 SCENES = ("pool", "tanabata", "factory")
-TARGET_IOU, TARGET_PRECISION = 0.7, 0.8  # issue 11
+TARGET_IOU, TARGET_PRECISION = 0.7, 0.8  # the LED's mask targets (docs/restoration_led_targets.md)
 
 
 def rain_spec(scene):

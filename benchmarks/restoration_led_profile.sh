@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The LED (the shipped weights, or LED_WEIGHTS=STEM) on the benchmark scenes at one render profile
-# (issue 11; docs/restoration_led_targets.md, "The LED at the paper profile"). Generates the rain variants of both
+# (docs/restoration_led_targets.md, "The LED at the paper profile"). Generates the rain variants of both
 # styles and the paper-style snow variants of tanabata, factory and pool at PROFILE (no COLMAP, with
 # the restoration targets; the clean renders come from the generate cache, so a second run only
 # re-weathers), runs `weathergs detect` on each (the default post-processing: the training views'
