@@ -50,7 +50,7 @@ MAKE_TRAINING_DATA = bash scripts/make-training-data.sh $(BUILD)/apps/weathergs 
 training-data: build
 	$(MAKE_TRAINING_DATA)
 
-# The LED's validation scenes station and village (docs/restoration_led_scenes.md, "A third draw"):
+# The LED's validation scenes station and village (docs/record/led_scenes.md, "A third draw"):
 # no network trains on them (only the adapted peak rule is calibrated on them: adapted-led-rule, below);
 # benchmarks/restoration_led_validation.py scores and
 # compares LED weights on them. An OUT of their own.
@@ -59,7 +59,7 @@ validation-data: build
 	TRAINING_PART=validation bash scripts/make-training-data.sh $(BUILD)/apps/weathergs $(VALIDATION_DATA) 12 quick
 
 # The peak rule `detect --adapt` uses, calibrated on the validation scenes' adapted maps
-# (docs/restoration_led_adapted.md, "A rule for adapted maps"; ~13 min on 2 cores with the default
+# (docs/record/led_adaptation.md, "A rule for adapted maps"; ~13 min on 2 cores with the default
 # 100 adaptation iterations; needs validation-data). Writes the LED weights in place (LED_WEIGHTS)
 # with that rule added.
 LED_WEIGHTS ?= models/led/led
@@ -120,7 +120,7 @@ test-slurm: build
 check-baseline: build
 	bash scripts/check_baseline.sh $(BUILD)/apps/weathergs out/check_baseline
 
-# Regenerates that baseline and its tolerances for today's recipes (benchmarks/baselines/README.md):
+# Regenerates that baseline and its tolerances for the current recipes (benchmarks/baselines/README.md):
 # after any change of a default that moves the numbers. SEEDS (at least 5) set the spread.
 SEEDS ?= 6
 regression-baseline: build

@@ -2,6 +2,7 @@
 #include <cstdio>
 
 #include "apps/command.h"
+#include "apps/train_flags.h"
 #include "core/progress.h"
 #include "reconstruction/run.h"
 
@@ -10,9 +11,8 @@ namespace {
 
 struct TrainArgs {
   recon::TrainRunOptions run;
-  std::string images = "images", masks = "none", random_init = "photo", mask_normalization = "valid",
-              large_prune = "distance";
-  std::vector<double> background;
+  std::string images = "images", masks = "none";
+  TrainFlags train;
   CLI::App* app = nullptr;
 };
 
@@ -20,11 +20,7 @@ int run_train(TrainArgs& args) {
   recon::TrainRunOptions o = args.run;
   o.inputs.images = recon::parse_train_images(args.images, "--images");
   o.inputs.masks = recon::parse_train_masks(args.masks, "--masks");
-  o.train.random_init = args.random_init == "frustum" ? recon::TrainOptions::RandomInit::kFrustum
-                                                      : recon::TrainOptions::RandomInit::kPhotoConsistent;
-  o.train.mask_normalization = args.mask_normalization == "reference" ? recon::MaskNormalization::kReference
-                                                                      : recon::MaskNormalization::kValid;
-  o.train.large_prune = recon::parse_large_prune(args.large_prune, "--large-prune");
+  args.train.apply(o.train);
   if (o.resume) {
     // Start from what the run was trained with; explicitly given flags must agree (checked below
     // through the checkpoint) or extend nothing silently.
@@ -51,10 +47,6 @@ int run_train(TrainArgs& args) {
     if (!given("--large-prune-from")) o.train.large_prune_from = stored.train.large_prune_from;
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
-  }
-  if (!args.background.empty()) {
-    if (args.background.size() != 3) throw InputError("--background", "expected 3 values (R G B in [0, 1])");
-    for (int c = 0; c < 3; ++c) o.train.background[c] = args.background[c];
   }
   ProgressBar bar("train", o.train.iterations);
   double psnr_ema = 0;
@@ -95,47 +87,14 @@ Command make_train(CLI::App& root) {
   sub->add_option("--masks-dir", o.inputs.masks_dir, "Loss masks from <DIR>/<view>.png instead (255 = ignore)");
   sub->add_option("--points-dir", o.inputs.points_dir,
                   "Initialize from this COLMAP text model (e.g. DATASET/sparse_clean/0) instead of sparse/0");
-  sub->add_option("--iterations", o.train.iterations, "Training iterations")->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--seed", o.train.seed, "Random seed (view order, splits, random init)")->capture_default_str();
-  sub->add_option("--background", args->background, "Background colour R G B in [0, 1] (default 0 0 0)")
-      ->expected(3);
-  sub->add_option("--max-gaussians", o.train.max_gaussians,
-                  "Memory guard: densification never grows the model beyond this many Gaussians (~2.6 KiB each)")
-      ->capture_default_str();
   sub->add_option("--distractors-per-view", o.train.distractors_per_view,
                   "DeSplat-style distractor Gaussians per training view, rendered only for their view and never "
                   "exported (the desplat method; 0 = plain 3DGS)")
       ->capture_default_str()->check(CLI::Range(0, 100000));
-  sub->add_option("--distractor-opacity-weight", o.train.distractor_opacity_weight,
-                  "Opacity penalty of the distractor Gaussians: the loss gains this x the image fraction their "
-                  "opacity covers (docs/reconstruction.md)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
   sub->add_flag("--in-the-wild", o.train.in_the_wild,
                 "gs-w-lite: per-view affine appearance and a learned per-view visibility map with GS-W's (1 - M)^2 "
                 "regulariser (docs/reconstruction.md, \"In the wild\")");
-  sub->add_option("--random-init", args->random_init,
-                  "Random initialization when the dataset has no COLMAP points: photo (each point at the depth "
-                  "where neighbouring views agree) or frustum (uniform in inverse depth, random colours)")
-      ->capture_default_str()->check(CLI::IsMember({"photo", "frustum"}));
-  sub->add_option("--mask-normalization", args->mask_normalization,
-                  "Masked loss: valid (means over the valid pixels, masked ones count for nothing) or reference "
-                  "(the WeatherGS release: masked target pixels replaced by the render, means over all pixels)")
-      ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
-  sub->add_option("--large-prune", args->large_prune,
-                  "Large-Gaussian prune (from large_prune_from on: the reference's first opacity reset, scaled with the run): distance (a Gaussian may be up to max_world_size x the "
-                  "larger of the cameras' extent and its distance from the rig) or camera_extent (the reference: max_world_size x "
-                  "the cameras' extent; collapses forward-facing scenes at 30,000 iterations); docs/reconstruction.md")
-      ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));
-  sub->add_option("--large-prune-from", o.train.large_prune_from,
-                  "Iteration after which the large-Gaussian prune runs (at densification steps); the default, the "
-                  "reference's first opacity reset, is scaled with --iterations like the densification window")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
-  sub->add_option("--random-init-count", o.train.random_init_count,
-                  "Gaussians for random initialization when the dataset has no COLMAP points")
-      ->capture_default_str();
-  sub->add_option("--checkpoint-every", o.checkpoint_every, "Iterations between checkpoints (0 = only at the end)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
+  args->train.add_to(sub, o.train, o.checkpoint_every);
   sub->add_option("--out", o.out, "Run folder (run.json, point_cloud.ply, checkpoint.bin)")->required();
   sub->add_flag("--resume", o.resume, "Continue the run in --out from its checkpoint");
   sub->add_flag("--force", o.force, "Start over even if --out already holds a run");

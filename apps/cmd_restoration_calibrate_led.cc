@@ -51,7 +51,7 @@ Command make(CLI::App& root) {
   sub->add_flag("--peak", a->options.search_peak, "Also calibrate the peak-relative rule and store it (detect's default rule then)");
   sub->add_flag("--adapted", a->options.adapted,
                 "The --maps were made with `detect --adapt`: calibrate only the rule `detect --adapt` uses "
-                "(adapted_peak_rule; needs --peak; docs/restoration_led_adapted.md)");
+                "(adapted_peak_rule; needs --peak; docs/record/led_adaptation.md)");
   sub->add_option("--min-precision", a->options.min_precision,
                   "Only rules whose mean held-out precision reaches this (0..1; default: no bound, the highest mean IoU)");
   sub->add_option("--width", a->options.width,

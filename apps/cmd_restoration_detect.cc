@@ -99,18 +99,18 @@ Command make(CLI::App& root) {
                     "Adapt the network to this scene first: fine-tune a copy on the training views with new lens "
                     "drops rendered over them (~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper "
                     "profile), then cut its map with the weights' adapted peak rule when they store one "
-                    "(docs/restoration_led_adapted.md)");
+                    "(docs/record/led_adaptation.md)");
   CLI::Option* passes =
       sub->add_option("--adapt-passes", a->adapt_options.passes,
                       "Length of --adapt's fine-tune, in passes over its layouts x training views examples (the "
-                      "default makes 100 iterations for 14 training views, 207 for 29; docs/restoration_led_adapted.md, "
+                      "default makes 100 iterations for 14 training views, 207 for 29; docs/record/led_adaptation.md, "
                       "\"Scaled with the training views\")")
           ->capture_default_str()
           ->needs(adapt);
   sub->add_option("--adapt-iterations", a->adapt_iterations,
                   "A fixed iteration count for --adapt's fine-tune instead of --adapt-passes (30 on a 14-view "
                   "dataset: ~3x sooner than the default 100, IoU ~0.005 lower on the validation scenes; "
-                  "docs/restoration_led_adapted.md, \"Fewer still\")")
+                  "docs/record/led_adaptation.md, \"Fewer still\")")
       ->check(CLI::Range(1, study::kMaxAdaptIterations))
       ->excludes(passes)
       ->needs(adapt);

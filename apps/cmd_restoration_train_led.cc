@@ -61,7 +61,7 @@ Command make(CLI::App& root) {
   sub->add_option("--view-pooling", a->view_pooling,
                   "What the views of one dataset share: none (each view alone), attention (the mean previous attention) "
                   "or attention+state (and the ConvLSTM's mean state); pooled networks train on --batch views of one dataset "
-                  "(measured, not adopted: docs/restoration_led_record.md, \"Pooling over the views\")")
+                  "(measured, not adopted: docs/record/led_variants.md, \"Pooling over the views\")")
       ->check(CLI::IsMember({"none", "attention", "attention+state"}))
       ->capture_default_str();
   CLI::Option* dilate = sub->add_option("--dilate", a->options.mask.dilate_iterations,

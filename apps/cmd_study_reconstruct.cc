@@ -5,6 +5,7 @@
 #include "apps/command.h"
 #include "apps/evaluator_flags.h"
 #include "apps/resources.h"
+#include "apps/train_flags.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "study/reconstruct.h"
@@ -20,8 +21,7 @@ struct ReconstructArgs {
   double led_threshold = 0;
   bool led_adapt = false;
   int led_adapt_layouts = 0, led_adapt_iterations = 0;  // 0: LedAdaptOptions' defaults
-  std::string mask_normalization = "valid";
-  std::string large_prune = "distance";
+  TrainFlags train;
   ScoringFlags scoring;
 };
 
@@ -30,12 +30,10 @@ int run(ReconstructArgs& a) {
   o.method = study::parse_method(a.method, "--method");
   o.points = a.no_triangulate ? study::PointsPolicy::kDataset : study::PointsPolicy::kAuto;
   o.scoring = a.scoring.options();
-  o.mask_normalization = a.mask_normalization == "reference" ? recon::MaskNormalization::kReference
-                                                             : recon::MaskNormalization::kValid;
-  o.large_prune = recon::parse_large_prune(a.large_prune, "--large-prune");
-  if (study::recipe(o.method).lens_detector) o.led_weights = find_led_weights(a.led_weights);
-  if (study::recipe(o.method).particle_filter && study::recipe(o.method).aef == restoration::FilterMethod::kLearned)
-    o.aef_weights = find_aef_weights(a.aef_weights);
+  a.train.apply(o.train);
+  const study::Recipe& recipe = study::spec(o.method).recipe;
+  if (recipe.needs_led_weights()) o.led_weights = find_led_weights(a.led_weights);
+  if (recipe.needs_aef_weights()) o.aef_weights = find_aef_weights(a.aef_weights);
   if (a.led_adapt) {
     o.led_adapt = study::LedAdaptOptions{};
     o.led_adapt->threads = num_threads();
@@ -46,8 +44,8 @@ int run(ReconstructArgs& a) {
     o.led_mask.rule = restoration::LedThresholdRule::kAbove;
     o.led_mask.threshold = a.led_threshold;
   }
-  const bool nerf = study::recipe(o.method).backend == study::Backend::kNerf;
-  const int total = nerf ? o.nerf.iterations : o.iterations;
+  const bool nerf = recipe.backend == study::BackendKind::kNerf;
+  const int total = nerf ? o.nerf.iterations : o.train.iterations;
   ProgressBar bar("train", total);
   int reported = 0;
   auto on_iteration = [&](const recon::IterationStats& st) {
@@ -81,7 +79,7 @@ Command make(CLI::App& root) {
   auto a = std::make_shared<ReconstructArgs>();
   std::string methods;
   for (study::Method m : study::all_methods())
-    methods += std::string(methods.empty() ? "" : ", ") + study::to_string(m) + " (" + study::method_description(m) + ")";
+    methods += std::string(methods.empty() ? "" : ", ") + study::spec(m).name + " (" + study::spec(m).description + ")";
   CLI::App* sub = root.add_subcommand(
       "reconstruct",
       "Run one method on one dataset end to end: SfM points if missing, training, test renders, evaluation "
@@ -89,37 +87,15 @@ Command make(CLI::App& root) {
   sub->add_option("--data", a->options.dataset, "Dataset folder")->required();
   sub->add_option("--method", a->method, "Method: " + methods)->capture_default_str();
   sub->add_option("--out", a->options.out, "Run folder")->required();
-  sub->add_option("--iterations", a->options.iterations, "Training iterations (3DGS methods)")->capture_default_str();
+  a->train.add_to(sub, a->options.train, a->options.checkpoint_every);
   sub->add_option("--nerf-iterations", a->options.nerf.iterations,
                   "Training iterations of the radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle; "
                   "batches of " + std::to_string(a->options.nerf.batch_rays) + " rays; docs/nerf.md)")
       ->capture_default_str()->check(CLI::PositiveNumber);
-  sub->add_option("--seed", a->options.seed, "Random seed")->capture_default_str();
-  sub->add_option("--mask-normalization", a->mask_normalization,
-                  "Masked loss (gt-masks, weathergs, weathergs-no-aef, robust-3dgs): valid (means over the valid "
-                  "pixels) or reference (the WeatherGS release: masked target pixels replaced by the render, means "
-                  "over all pixels); docs/reconstruction.md")
-      ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
-  sub->add_option("--large-prune", a->large_prune,
-                  "Large-Gaussian prune (from large_prune_from on: the reference's first opacity reset, scaled with the run): distance (a Gaussian may be up to max_world_size x the "
-                  "larger of the cameras' extent and its distance from the rig) or camera_extent (the reference: max_world_size x "
-                  "the cameras' extent; collapses forward-facing scenes at 30,000 iterations); docs/reconstruction.md")
-      ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));
-  sub->add_option("--large-prune-from", a->options.large_prune_from,
-                  "3DGS methods: iteration after which the large-Gaussian prune runs; the default, the reference's "
-                  "first opacity reset, is scaled with --iterations (docs/reconstruction.md)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
-  sub->add_option("--distractor-opacity-weight", a->options.distractor_opacity_weight,
-                  "desplat: opacity penalty of the per-view distractor Gaussians (docs/reconstruction.md)")
-      ->capture_default_str()->check(CLI::NonNegativeNumber);
-  sub->add_option("--random-init-count", a->options.random_init_count,
-                  "Gaussians of the random initialization (used when there are no SfM points)")
-      ->capture_default_str();
-  sub->add_option("--checkpoint-every", a->options.checkpoint_every, "Iterations between checkpoints (0 = only at the end)")
-      ->capture_default_str();
   sub->add_option("--eval-at", a->options.eval_at,
                   "Also score the test views at these iterations (comma-separated, e.g. 500,1000,2000): RUN/curve.json "
-                  "holds accuracy against training seconds (docs/study.md)")
+                  "holds accuracy against training seconds; the radiance-field methods score at the same fractions of their run "
+                  "(docs/study.md)")
       ->delimiter(',');
   sub->add_flag("--force", a->options.force,
                 "Start the run over: remove what an earlier run left at --out (a complete run, or stages made with "
@@ -140,14 +116,14 @@ Command make(CLI::App& root) {
       sub->add_flag("--led-adapt", a->led_adapt,
                     "Adapt the LED to the dataset first (`detect --adapt`: a fine-tune on the training views with new "
                     "lens drops, ~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper profile; "
-                    "docs/restoration_led_adapted.md)");
+                    "docs/record/led_adaptation.md)");
   sub->add_option("--led-adapt-layouts", a->led_adapt_layouts,
                   "Drop layouts of --led-adapt (`detect --adapt-layouts`; default 4)")
       ->check(CLI::Range(1, study::kMaxAdaptLayouts))
       ->needs(adapt);
   sub->add_option("--led-adapt-iterations", a->led_adapt_iterations,
                   "A fixed iteration count for --led-adapt (`detect --adapt-iterations`; default ~7 passes over the "
-                  "examples; 1 layout x 10 iterations: docs/restoration_led_fast.md)")
+                  "examples; 1 layout x 10 iterations: docs/record/led_adaptation_brief.md)")
       ->check(CLI::Range(1, study::kMaxAdaptIterations))
       ->needs(adapt);
   a->scoring.add_to(sub);

@@ -303,6 +303,11 @@ MapperResult map_unknown_poses(const std::string& image_dir, const std::string& 
 const char* to_string(TriangulateImages i) { return i == TriangulateImages::kClean ? "clean" : "images"; }
 const char* to_string(TriangulateViews v) { return v == TriangulateViews::kTrain ? "train" : "all"; }
 
+bool has_sfm_points(const std::string& model_dir) {
+  const fs::path p = fs::path(model_dir) / "points3D.txt";
+  return fs::exists(p) && !read_colmap_points3d(p.string()).empty();
+}
+
 TriangulationResult triangulate_dataset(const std::string& dataset_dir, const TriangulateOptions& o,
                                         std::string* model_dir_out) {
   o.colmap.validate();

@@ -61,6 +61,9 @@ struct TriangulateOptions {
 
 // Writes the model atomically (nothing on failure) and COLMAP's logs to logs/colmap[_clean]/.
 // InputError: no dataset, no clean/ for kClean, an existing model without force, no matches.
+// Whether the COLMAP text model in `model_dir` has at least one 3D point (points3D.txt).
+bool has_sfm_points(const std::string& model_dir);
+
 TriangulationResult triangulate_dataset(const std::string& dataset_dir, const TriangulateOptions& options,
                                         std::string* model_dir = nullptr);
 

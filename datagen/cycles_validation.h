@@ -1,5 +1,4 @@
-// Path-tracer validation of the weather compositor (issues 5 and 10 §1; benchmarks/README.md,
-// "Path-tracer validation").
+// Path-tracer validation of the weather compositor (benchmarks/README.md, "Path-tracer validation").
 //
 // Lens drops (a dataset whose spec has lens_droplets alone, attached to the lens, untilted, on the
 // scene side): the view's drops from dataset.json go to Blender as water caps closed by their base on
@@ -51,7 +50,7 @@ struct CyclesValidationOptions {
   // Lens drops: the cover glass they sit on, modelled in the reference as a slab on the camera side
   // of the drops (the generator's `glass_thickness_mm`: a slab, or 0 for its thin glass, which turns
   // no ray). 1 mm of crown glass is our choice of a typical cover (the physical style's default too);
-  // 0 leaves the plate out (the reference before the second pass of 2026-11-25).
+  // 0 leaves the plate out, the counterpart of the generator's thin glass.
   double glass_thickness_m = 1e-3;
   double glass_refractive_index = lens::kCrownGlassRefractiveIndex;
   // Lens drops: a dark camera front 1 mm behind the aperture, so light the drops or the glass send back

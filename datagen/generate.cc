@@ -144,7 +144,7 @@ GenerateSummary generate_variant(const std::string& scene_path, const std::strin
     wopts.copy_exports = false;
     wopts.write_targets = o.targets;
     wopts.style = o.style;  // sparse/0 and transforms.json are made below from the weathered images
-    // The particles are lit by the scene's sun (docs/generator.md, "Photometry"): the spec says so
+    // The particles are lit by the scene's sun (docs/record/generator_history.md, "Photometry"): the spec says so
     // unless it names its own lighting.
     Json weather = variant.weather;
     const Json& sun = variant.lights.at("sun");

@@ -1,8 +1,8 @@
 // `weathergs photo-scene`: one photograph -> a clear dataset that the weather generator accepts
 // (docs/scenes.md, "Photographs as clear scenes"). The views are crops of the photograph taken by a
 // camera that pans about a fixed centre; the depth is synthetic (a ground plane below the horizon row,
-// a backdrop above). It exists for the restoration training set (issue 11: crop variety from clean
-// photographs): lens drops need only the image and the camera, airborne particles need some depth.
+// a backdrop above). It exists for the restoration training set, which needs crop variety from clean
+// photographs: lens drops need only the image and the camera, airborne particles need some depth.
 #pragma once
 
 #include <string>

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Runs every libFuzzer harness of a fuzz build for SECONDS each (default 60; the runs: 600),
+# Runs every libFuzzer harness of a fuzz build for SECONDS each (default 60; the full runs: 600),
 # one after the other, seeds from fuzz/corpus/<name>/, new inputs in BUILD/corpus/<name>/, crashes in
 # BUILD/crashes/. Prints one line per harness: executions, coverage, and the outcome.
 # Usage: fuzz/run.sh BUILD [SECONDS] [harness...]

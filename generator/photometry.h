@@ -1,4 +1,4 @@
-// Radiance of a falling particle from the light around it (docs/generator.md, "Photometry").
+// Radiance of a falling particle from the light around it (docs/record/generator_history.md, "Photometry").
 //
 // A drop or flake is tiny against the distances to what lights it, so the radiance it sends along the
 // camera ray d depends on d only: L(d) = integral over directions w of E(w) k(angle(w, d)) dw, with E

@@ -48,7 +48,7 @@ constexpr double kBeardChuang_cm[5] = {1.0048, 0.0057, -2.628, 3.682, -1.677};
 constexpr double kKoschmiederContrast = 0.02;
 constexpr double kKoschmiederConstant = 3.912;
 
-// Optical extinction by rain, beta = 0.312 R^0.67 km^-1 (issue 3's model). Cross-checked in the tests
+// Optical extinction by rain, beta = 0.312 R^0.67 km^-1 (the specified model). Cross-checked in the tests
 // against geometric optics (extinction efficiency 2) integrated over Marshall-Palmer.
 constexpr double kRainExtinctionCoef_per_km = 0.312;
 constexpr double kRainExtinctionExp = 0.67;

@@ -50,7 +50,7 @@ struct RenderOptions {
 // falls below the cutoff at z = f r sqrt(pi a0 / cutoff). Capped at options.max_distance_m.
 double visibility_distance_m(double f_px, double r_m, double a0, const RenderOptions& options);
 
-// Light of the particles (docs/generator.md, "Photometry").
+// Light of the particles (docs/record/generator_history.md, "Photometry").
 enum class ParticleShading {
   kOptics,    // physical: the particle's optics over the light around it (generator/photometry.h)
   kWeighted,  // paper style: weights of a wide blur of the view and of the sky radiance

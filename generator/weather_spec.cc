@@ -391,18 +391,18 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
   if (effects.has("lens_droplets")) {
     spec.lens_droplets = lens::parse_lens_droplet_spec(effects.child("lens_droplets"));
     // Physical style: light the drops' unfollowed paths (surface reflections, rays trapped by total
-    // internal reflection) with the sky, which agrees with Cycles (benchmarks/README.md, "Lens drops
+    // internal reflection) with the sky, which agrees with Cycles (docs/record/cycles_validation.md, "Lens drops
     // against Cycles"); the paper style keeps the view's mean its suite was generated with.
     if (spec.style == WeatherStyle::kPhysical && !effects.child("lens_droplets").has("environment_radiance"))
       spec.lens_droplets->environment_sky = true;
     // Physical style, drops on the lens: light sent back towards the camera meets its dark front (a
     // black camera body in the Cycles reference; sky there instead: -2.0 dB against +7.7 dB,
-    // benchmarks/README.md, "The cover glass and the camera's body").
+    // docs/record/cycles_validation.md, "The cover glass and the camera's body").
     if (spec.style == WeatherStyle::kPhysical && spec.lens_droplets->attach == lens::Attach::kLens &&
         !effects.child("lens_droplets").has("camera_radiance"))
       spec.lens_droplets->camera_radiance = std::array<double, 3>{0, 0, 0};
     // Physical style, drops on the lens: they sit on a 1 mm cover glass, the slab of the Cycles
-    // reference (+8.9 dB against it, the thin glass +7.0 dB: benchmarks/README.md, "The glass as a
+    // reference (+8.9 dB against it, the thin glass +7.0 dB: docs/lens_droplets.md, "The glass as a
     // slab"). A window's pane is left thin unless given (its thickness varies, 3-10 mm). A glass
     // nearer than 4 mm gets a quarter of its distance (the slab must lie between camera and drops).
     if (spec.style == WeatherStyle::kPhysical && spec.lens_droplets->attach == lens::Attach::kLens &&

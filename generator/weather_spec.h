@@ -54,7 +54,7 @@ struct ParticleEffectSpec {
 // Physical snow's visibility cutoff: against Cycles rendering every flake of the view (down to a
 // peak alpha of 0.002), the layer drawn at 0.01 is +5.8 dB closer than an empty one with 0.65 of the
 // energy (both aims missed: the faint flakes carry a third of it); at 0.002, +11.3 dB and 0.94
-// (benchmarks/README.md, "Snow against its whole population"). Rain keeps render.visibility_cutoff
+// (docs/record/cycles_validation.md, "Snow against its whole population"). Rain keeps render.visibility_cutoff
 // (0.01): drawing fainter drops brought it no closer (its far drops are lit by what surrounds them).
 constexpr double kPhysicalSnowVisibilityCutoff = 0.002;
 

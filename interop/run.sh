@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Real clients read what weathergs writes (issue 15 §5; docs/interop.md). Usage:
+# Real clients read what weathergs writes (docs/interop.md). Usage:
 #   interop/run.sh BUILD [OUT]      (make interop: installs the npm packages and Debian chromium first)
 # 1. a small dataset: pool (tiny profile, clear weather) from Blender when it is installed, else
 #    `weathergs example`; a short 3DGS training on it and `weathergs render` of its test views;

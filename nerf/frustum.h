@@ -45,7 +45,7 @@ double near_from_points(const std::vector<Camera>& cameras, const std::vector<Ei
 
 // The SfM points the near plane is taken from: those seen by at least kNearMinTrack views, or all of
 // them when fewer than kNearMinPoints are. A point triangulated from two views has no third view to check it, and
-// the 1st percentile of a small model is its second-nearest point: on the 2026-11-28 quick suite two
+// the 1st percentile of a small model is its second-nearest point: on the quick suite two
 // whitish two-view points of pool_snow's 148 (probably falling snow matched across two views) lay
 // 0.1-0.9 m in front of a camera whose median point lies at 13 m, and put the near plane ~10x closer
 // than on pool_rain: a 10x larger lattice, and `nerf` 4.9 dB below what it scores with this filter

@@ -9,6 +9,7 @@
 #include "core/dataset_layout.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/json_reader.h"
 #include "core/progress.h"
 
 namespace weathergs::nerf {
@@ -89,6 +90,21 @@ std::string nerf_snapshot_dir(const std::string& run_dir, int iteration) {
   char name[32];
   std::snprintf(name, sizeof name, "iter_%06d", iteration);
   return (fs::path(run_dir) / "snapshots" / name).string();
+}
+
+StageOutput nerf_run_output(const std::string& run_dir, int iterations) {
+  StageOutput s;
+  s.record = (fs::path(run_dir) / kRunJson).string();
+  if (!fs::exists(s.record)) return s;
+  const Json j = read_json_file(s.record);
+  if (j.value("format", "") != kNerfRunFormat) {
+    s.state = StageOutput::State::kStale;
+    s.why = "format: not a radiance field";
+  } else if (j.value("complete", false)) {
+    s.why = settings_mismatch(j, Json{{"iterations", iterations}});
+    s.state = s.why.empty() ? StageOutput::State::kComplete : StageOutput::State::kStale;
+  }
+  return s;
 }
 
 NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallback& on_iteration) {

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "core/stage_output.h"
 #include "core/train_views.h"
 #include "nerf/trainer.h"
 
@@ -45,6 +46,11 @@ struct NerfRunResult {
 
 using NerfIterationCallback = std::function<void(const NerfIterationStats&)>;
 NerfRunResult train_nerf_run(const NerfRunOptions& options, const NerfIterationCallback& on_iteration = {});
+
+// What the run folder `run_dir` holds against a run of `iterations`: stale when run.json is not a
+// radiance field's or a complete run of another length, complete when it is a complete run of this
+// length, absent otherwise (the field keeps no checkpoints: an incomplete run starts over).
+StageOutput nerf_run_output(const std::string& run_dir, int iterations);
 
 // The folder of the renders kept at one snapshot iteration.
 std::string nerf_snapshot_dir(const std::string& run_dir, int iteration);

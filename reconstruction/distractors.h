@@ -3,7 +3,7 @@
 // Gaussians placed in front of its camera. They are rendered only for their own view, so they can take
 // up what that view sees and the others do not (falling particles, drops on the lens, anything the
 // multi-view consistent scene cannot explain more cheaply), and they are dropped at test time and
-// from the exported model. No pretrained features, as in the definition.
+// from the exported model. No pretrained features, as the method is defined here.
 //
 // Compositing: DeSplat renders the distractors and the scene separately and blends
 // C = C_d + (1 - A_d) C_s. We rasterize the scene and the view's distractors in one depth-sorted pass;

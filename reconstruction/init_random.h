@@ -1,6 +1,6 @@
 // Initial Gaussians for a dataset without SfM points (no sparse/0).
 //
-// kFrustum (the old default): uniform over the train views' frusta between near and far, uniform in
+// kFrustum: uniform over the train views' frusta between near and far, uniform in
 // inverse depth, random colours. On a forward-facing rig half of those points start within ~1 m of
 // the cameras, where no other view sees them, and training keeps them as floaters (docs/reconstruction.md:
 // 13 dB on a street scene that reaches 31 dB from COLMAP points).

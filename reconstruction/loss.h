@@ -10,7 +10,7 @@
 // the window counts as perfectly matched, carries no information about the render and receives
 // exactly zero gradient. Without a mask this is the reference loss exactly.
 //
-// MaskNormalization::kReference instead follows the WeatherGS release as the issue describes it: the
+// MaskNormalization::kReference instead follows the WeatherGS release as it is specified here: the
 // target's masked pixels are replaced by the render (held constant) and both terms are averaged over
 // ALL pixels. Masked pixels then add nothing to L1 but still take part in the SSIM windows of their
 // neighbours and receive an SSIM gradient, and the loss of a heavily masked view is scaled down by

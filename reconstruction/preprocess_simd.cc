@@ -188,7 +188,7 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
   int64_t lane[W];  // the Gaussian of each lane; the tail repeats the last one
   for (int l = 0; l < W; ++l) lane[l] = i0 + std::min(l, count - 1);
   // The SH coefficients (192 bytes per Gaussian) of the block after next: their loads were a
-  // quarter of this function's time; fetched ahead the preprocess takes ~10 % less (2026-11-27).
+  // quarter of this function's time; fetched ahead the preprocess takes ~10 % less.
   constexpr int64_t kShAhead = 2 * W;
   if (i0 + kShAhead + W <= int64_t(g.size())) {
     const char* ahead = reinterpret_cast<const char*>(&g.sh[size_t(i0 + kShAhead) * kShFloats]);

@@ -8,7 +8,7 @@
 // render at 8 lanes is the exception: it runs the fused copy of raster_image_simd.cc where the CPU has
 // FMA (faster, equal to these up to rounding). A 16-lane AVX-512F variant of
 // this template was measured 2.6x slower than 8 lanes (130 vs 50 ms per iteration, bench_reconstruction
-// 300x200/50k, 2026-11-24) and is not built. The lanes of a block that lie outside a Gaussian's
+// 300x200/50k) and is not built. The lanes of a block that lie outside a Gaussian's
 // alpha extent get alpha < 1/255 and are skipped by the same test as any other pixel, so wider
 // blocks change the work, never the result.
 #include <algorithm>

@@ -104,7 +104,7 @@ inline void sort_by_depth(std::vector<uint64_t>* keys) {
 // sort of the visible Gaussians by (depth, index), then a scatter in that order: every tile list
 // comes out sorted exactly as a per-tile sort would leave it. The lists hold Gaussian indices and the
 // kernels read the records where preprocessing wrote them: gathering the records into depth order
-// cost more in the scatter than it saved in the blend (benchmarks/README.md, 2026-11-27 evening).
+// cost more in the scatter than it saved in the blend (benchmarks/README.md).
 template <typename T>
 void bin_and_sort(RasterState<T>* s, std::vector<uint64_t>* keys, bool entry_slots) {
   const int64_t n = int64_t(s->radius.size());

@@ -11,6 +11,7 @@
 #include "core/atomic_file.h"
 #include "core/colmap_model.h"
 #include "core/error.h"
+#include "core/json_reader.h"
 #include "core/image.h"
 #include "core/progress.h"
 #include "reconstruction/init_random.h"
@@ -173,6 +174,22 @@ GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& 
   }
   *source = "random:" + std::to_string(options.random_init_count);
   return init_random(train_views, options);
+}
+
+StageOutput run_output(const std::string& run_dir, const TrainOptions& train) {
+  StageOutput s;
+  s.record = (fs::path(run_dir) / "run.json").string();
+  if (!fs::exists(s.record)) return s;
+  const Json j = read_json_file(s.record);
+  if (std::string why = settings_mismatch(j.value("options", Json::object()), train.to_json()); !why.empty()) {
+    s.state = StageOutput::State::kStale;
+    s.why = "options." + why;
+  } else if (j.value("complete", false)) {
+    s.state = StageOutput::State::kComplete;
+  } else if (fs::exists(fs::path(run_dir) / "checkpoint.bin")) {
+    s.state = StageOutput::State::kPartial;
+  }
+  return s;
 }
 
 TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_iteration) {

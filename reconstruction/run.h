@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/dataset.h"
+#include "core/stage_output.h"
 #include "core/train_views.h"
 #include "reconstruction/trainer.h"
 
@@ -65,6 +66,12 @@ struct TrainRunResult {
 
 // The options a run folder was trained with (from its run.json), for --resume.
 TrainRunOptions read_run_options(const std::string& run_dir);
+
+// What the run folder `run_dir` holds against the trainer options `train`: stale when run.json's
+// options record differs in any key (another length, seed or recipe is another model: the "why"
+// reads "options.KEY: ..."), complete when it says so, partial when a checkpoint to resume from
+// is there, absent otherwise. A run resumed from a partial one ends with the same model, bit for bit.
+StageOutput run_output(const std::string& run_dir, const TrainOptions& train);
 
 // Per-iteration callback (progress reporting); may be empty.
 using IterationCallback = std::function<void(const IterationStats&)>;

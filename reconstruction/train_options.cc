@@ -185,11 +185,11 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   o.min_opacity = r.get_or("min_opacity", o.min_opacity);
   o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
   o.max_world_size = r.get_or("max_world_size", o.max_world_size);
-  // Absent before 2026-11-26: the prune then started after the first reset, so a stored run resumes
+  // A run or checkpoint stored without this key started the prune after the first reset, so it resumes
   // with the start it had (a checkpoint stores the effective, scaled options).
   o.large_prune_from = r.get_or("large_prune_from", o.opacity_reset_interval);
-  // Absent in runs and checkpoints written before the key existed (2026-11-25): they trained with
-  // the reference rule, and a resumed one must go on with it, not switch silently.
+  // Runs and checkpoints stored without this key trained with the reference rule, and a resumed one
+  // must go on with it, not switch silently.
   o.large_prune = r.get_enum_or("large_prune", LargePrune::kCameraExtent,
                                 {LargePrune::kCameraExtent, LargePrune::kDistance});
   o.max_gaussians = r.get_or<int64_t>("max_gaussians", o.max_gaussians);

@@ -197,6 +197,30 @@ Json detect_settings_json(const std::string& weights_sha256, const DetectDataset
               {"dilate_iterations", *m.dilate_iterations}};
 }
 
+void use_adapted_peak_rule(LensDetector& led) {
+  if (led.adapted_peak_rule()) led.set_peak_rule(led.adapted_peak_rule());
+}
+
+StageOutput detect_output(const std::string& out, const DetectDatasetOptions& options, const Json& adaptation) {
+  StageOutput s;
+  s.record = (fs::path(out) / kDetectReportFile).string();
+  if (!fs::exists(s.record)) return s;
+  const Json report = read_json_file(s.record);
+  const bool adapted = !report.value("adaptation", Json()).is_null(), asked = !adaptation.is_null();
+  if (adapted != asked) {
+    s.why = std::string("made ") + (adapted ? "with" : "without") + " adapting the LED to the dataset, asked for " +
+            (adapted ? "without" : "with") + " it";
+  } else {
+    LensDetector led = LensDetector::load(options.weights);
+    if (asked) use_adapted_peak_rule(led);
+    s.why = settings_mismatch(report, detect_settings_json(led.metadata().value("weights_sha256", ""), options,
+                                                           options.mask.resolved(led)));
+    if (s.why.empty() && asked) s.why = settings_mismatch(report.at("adaptation"), adaptation);
+  }
+  s.state = s.why.empty() ? StageOutput::State::kComplete : StageOutput::State::kStale;
+  return s;
+}
+
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& o) {
   o.mask.validate();
   if (o.batch < 1 || o.batch > 64) throw InputError("detect batch", "expected 1..64, got " + std::to_string(o.batch));

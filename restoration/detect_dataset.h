@@ -10,6 +10,7 @@
 #include "core/dataset.h"
 #include "core/image.h"
 #include "core/json_reader.h"
+#include "core/stage_output.h"
 #include "restoration/lens_detector.h"
 
 namespace weathergs::restoration {
@@ -92,7 +93,7 @@ struct DetectDatasetReport {
                                         // (train views), or every view with per-view averaging
   // Against where the drops are rather than where they show: the lens coverage layer at or above
   // the dataset's coverage-rule threshold (its resolved lens_droplets.mask_threshold), over the same
-  // views, when the dataset has layers/lens_coverage/ for all of them (docs/restoration_led_targets.md,
+  // views, when the dataset has layers/lens_coverage/ for all of them (docs/record/led_targets.md,
   // "Where the drops are, not where they show").
   std::optional<LedScore> coverage_truth;
   double coverage_threshold = 0;
@@ -104,6 +105,17 @@ struct DetectDatasetReport {
 // settings_mismatch (core/json_reader.h) instead of detecting again (study/reconstruct).
 Json detect_settings_json(const std::string& weights_sha256, const DetectDatasetOptions& options,
                           const LedMaskOptions& resolved);
+
+// An adapted network's maps peak differently from the base's: they are cut with the rule the weights
+// store for adapted maps (`adapted_peak_rule`, calibrate-led --adapted) when they have one. Sets
+// `led`'s peak rule to it; leaves `led` as it is otherwise.
+void use_adapted_peak_rule(LensDetector& led);
+
+// What `out` holds against `options`: complete when its detect.json records the same masks, stale
+// naming the first difference, absent without detect.json (written last). `adaptation`: the settings
+// record of the adaptation this run asks for (null: the weights as they are), compared with
+// detect.json's "adaptation".
+StageOutput detect_output(const std::string& out, const DetectDatasetOptions& options, const Json& adaptation);
 
 // Writes <out>/<view>.png for every view (255 = excluded from the loss, the dataset's mask convention)
 // and detect.json last, atomically. InputError names the dataset, view, weights or option.

@@ -121,6 +121,15 @@ std::string filter_settings_mismatch(const Json& report, const FilterDatasetOpti
   return "";
 }
 
+StageOutput filter_output(const std::string& out, const FilterDatasetOptions& options, int width) {
+  StageOutput s;
+  s.record = (fs::path(out) / kFilterReportFile).string();
+  if (!fs::exists(s.record)) return s;
+  s.why = filter_settings_mismatch(read_json_file(s.record), options, width);
+  s.state = s.why.empty() ? StageOutput::State::kComplete : StageOutput::State::kStale;
+  return s;
+}
+
 FilterDatasetReport filter_dataset(const std::string& dataset, const std::string& out, const FilterDatasetOptions& o) {
   o.validate();
   const auto start = std::chrono::steady_clock::now();

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/dataset_layout.h"
+#include "core/stage_output.h"
 #include "restoration/particle_filter.h"
 #include "restoration/weather_selector.h"
 
@@ -82,6 +83,9 @@ Json filter_settings_json(const FilterDatasetOptions& options, int width);
 // Whether a filter.json was made with `options`: "" if so, else the first difference ("KEY: holds A,
 // asked for B"), the weight files compared by sha256. How a resumed run decides to reuse its output.
 std::string filter_settings_mismatch(const Json& report, const FilterDatasetOptions& options, int width);
+// What `out` holds against `options` (dataset width `width`): complete when its filter.json matches,
+// stale naming the first difference, absent without filter.json (written last).
+StageOutput filter_output(const std::string& out, const FilterDatasetOptions& options, int width);
 
 // Every view of the dataset; `out` is written atomically with filter.json (method, task, weights,
 // per-view plugin, cosines, mask fraction, seconds). Every input and every weight file is checked

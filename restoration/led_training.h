@@ -56,7 +56,7 @@ struct LedCalibrationOptions {
   bool search_dilations = false;  // also choose the count, 0..kMaxCalibratedDilations
   bool search_peak = false;       // also choose the peak-relative rule
   // Only rules whose mean precision over the held-out datasets with drops reaches this count
-  // (issue 11 asks for 0.8 together with IoU 0.7); InputError when no rule of the grid does.
+  // (the target is 0.8 together with IoU 0.7); InputError when no rule of the grid does.
   std::optional<double> min_precision;
   void validate() const;
 };

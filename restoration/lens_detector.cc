@@ -108,8 +108,8 @@ int internal_height(const LedArchitecture& a, int width, int height) {
 // sRGB image (3 or 4 channels) -> [4, h, w] float tensor at the internal size: RGB by area resampling,
 // and a sharpness channel, the mean |Laplacian| of the luminance taken at the full resolution and then
 // area-averaged. A defocused drop is above all a region without fine texture; that cue lives in the
-// frequencies the downsampling removes, so it is measured before (issue 11 allows reduced resolution
-// inside the network; this keeps what the drop looks like at full resolution).
+// frequencies the downsampling removes, so it is measured before (the network may work at reduced
+// resolution; this keeps what the drop looks like at full resolution).
 torch::Tensor to_tensor(const Image& img, int w, int h, const std::string& where) {
   if (img.empty() || img.channels < 3)
     throw InputError(where, "expected an RGB image (3 or 4 channels), got " + img.to_string());

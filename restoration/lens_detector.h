@@ -29,7 +29,7 @@ inline constexpr int kMaxDilations = 50;
 // n when 0 <= n <= kMaxDilations, else an InputError naming the LED's dilate_iterations.
 int checked_dilations(int n);
 
-// What the views of one network call share (docs/restoration_led_record.md, "Pooling over the views";
+// What the views of one network call share (docs/record/led_variants.md, "Pooling over the views";
 // measured, not adopted):
 // kNone: every view on its own (the paper's network). kAttention: each recurrent step also sees the
 // mean of the previous attention over the views of the call. kAttentionAndState: and the ConvLSTM sees
@@ -42,7 +42,7 @@ LedViewPooling parse_led_view_pooling(const std::string& s, const std::string& w
 
 struct LedArchitecture {
   int steps = 4;           // recurrent steps (the paper's N)
-  int width = 216;         // internal width in pixels (144 until 2026-11-26); the height keeps the aspect ratio
+  int width = 216;         // internal width in pixels; the height keeps the aspect ratio
   int channels = 16;       // feature channels after the strided conv (and of the ConvLSTM state)
   int residual_blocks = 3; // dilations 1, 2, 4, ... (the receptive field must cover a defocused drop)
   LedViewPooling view_pooling = LedViewPooling::kNone;  // `view_pooling` in the JSON (absent: none)
@@ -51,7 +51,7 @@ struct LedArchitecture {
   static LedArchitecture from_json(const JsonReader& r);
 };
 
-// The peak-relative threshold of the averaged attention (docs/restoration_led.md, "The peak-relative
+// The peak-relative threshold of the averaged attention (docs/record/led_history.md, "The peak-relative
 // rule"): every 8-connected region where m >= low whose maximum reaches seed keeps its pixels with
 // m >= max(low, fraction * maximum); regions whose maximum stays under seed are dropped. The network is
 // less sure of medium drops than of large ones (their peaks are lower), so one global threshold
@@ -137,7 +137,7 @@ class LensDetector {
 
   const LedArchitecture& architecture() const;
   // Runs the same network at another internal width (no parameter depends on it; a larger width
-  // enlarges every drop inside the network; docs/restoration_led_record.md, "Run at width 252").
+  // enlarges every drop inside the network; docs/record/led_variants.md, "Run at width 252").
   // InputError outside 16..2048.
   void set_width(int width);
   int64_t parameter_count() const;
@@ -154,7 +154,7 @@ class LensDetector {
   void set_peak_rule(const std::optional<LedPeakRule>& rule);
   // The peak rule calibrated on maps of this network adapted to each held-out scene (`adapted_peak_rule`
   // in <stem>.json; `calibrate-led --maps ... --adapted`), if any: `detect --adapt` uses it instead of
-  // peak_rule(), since the adapted network's maps peak differently (docs/restoration_led_adapted.md).
+  // peak_rule(), since the adapted network's maps peak differently (docs/record/led_adaptation.md).
   const std::optional<LedPeakRule>& adapted_peak_rule() const;
   void set_adapted_peak_rule(const std::optional<LedPeakRule>& rule);
   const Json& metadata() const;  // the JSON read by load (empty for a fresh network)

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Calibrates the peak rule `weathergs detect --adapt` uses (adapted_peak_rule in the LED's weights;
-# docs/restoration_led_adapted.md, "A rule for adapted maps"): runs `detect --adapt --save-attention`
+# docs/record/led_adaptation.md, "A rule for adapted maps"): runs `detect --adapt --save-attention`
 # on every dataset of HELD_OUT (<scene>_wNN; by default the validation scenes of `make
 # validation-data`), then `calibrate-led --maps ... --adapted --peak --min-precision MIN_PRECISION`,
 # which writes the same network with that rule added. `make adapted-led-rule`.
@@ -10,7 +10,7 @@
 # MAPS caches the detect outputs (a finished one is kept; delete it to redo it). Each detect runs on
 # one thread, JOBS (default 2) at a time; the maps depend neither on how many run at once nor on the
 # thread count. About 60 s per dataset on one core (100 adaptation iterations), ~13 min for the 24
-# validation datasets on 2 cores. MIN_PRECISION (default 0.8, issue 11's target; "none" for the
+# validation datasets on 2 cores. MIN_PRECISION (default 0.8, the precision target; "none" for the
 # plain highest mean IoU).
 set -euo pipefail
 usage="usage: calibrate-adapted-led.sh WEATHERGS HELD_OUT MAPS WEIGHTS_STEM [OUT_STEM]"

@@ -5,7 +5,7 @@
 # fixed table walked by the index k, so the set is deterministic from its seeds (weather seed = 1000 *
 # scene index + k, the indices in SCENE_INDEX). EXTRA_SCENES=1 adds the scenes station and village
 # (indices 64 and 65: the weather mixes of 4 and 5 with seeds of their own), measured and not adopted
-# for the shipped LED (docs/restoration_led_record.md, "Two more training scenes"). Existing outputs are kept
+# for the shipped LED (docs/record/led_variants.md, "Two more training scenes"). Existing outputs are kept
 # (the set is a cache: delete OUT to rebuild). Prints its size and time; writes OUT/manifest.json.
 # Overcast bases for the lens-drop detector: each scene's `wet` and `snowy` variants (overcast sky,
 # wet or snowy ground; the scenes' base lights are all sunny) rendered clear as <scene>_wet and
@@ -21,20 +21,20 @@
 # (default 6) times with the matching effect table (scene index 100 + i: seeds of their own), as
 # assorted_NN_wMM, assorted_NN_wet_wMM or assorted_NN_snowy_wMM. Only the LED uses them: by default
 # they calibrate its peak rule with market (LED_ASSORTED in scripts/train-models.sh;
-# docs/restoration_led_scenes.md).
+# docs/record/led_scenes.md).
 # TRAINING_PART=all|base|assorted|validation (default all): make everything, everything but the
 # assorted scenes, or only them. `make models` makes the base part first and the assorted scenes
 # beside the LED's training (scripts/train-models.sh), which does not need them until its calibration.
 # `validation` (into an OUT of its own): only the two validation scenes station and village (scene
 # indices 64, 65; rendered clear, WEATHERS weathers each), which no network trains on or is calibrated
-# on; they choose between draws of the LED recipe (docs/restoration_led_scenes.md, "A third draw").
+# on; they choose between draws of the LED recipe (docs/record/led_scenes.md, "A third draw").
 # Not with EXTRA_SCENES=1, which trains on the same scenes.
 # RENDER_JOBS (default 2): Blender renders at once (scripts/train-models.sh makes the assorted scenes
 # with 1, beside the LED's training).
 # LENS_MASK_RULE (default perceptible, the generator's default) sets the lens drops' `mask_rule`, the
 # LED's target: `coverage` makes masks/lens/ the drops' blurred lens coverage >= 0.1 instead of where
 # they change the view by more than 4 levels (docs/lens_droplets.md); measured, not adopted
-# (docs/restoration_led_targets.md, "Where the drops are, not where they show"). An OUT made with
+# (docs/record/led_targets.md, "Where the drops are, not where they show"). An OUT made with
 # the other rule is an error (its cached datasets would mix the two).
 #
 #   scripts/make-training-data.sh BUILD/apps/weathergs OUT [WEATHERS=12] [PROFILE=quick]

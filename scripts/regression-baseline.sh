@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates CI's regression baseline (benchmarks/baselines/regression/, README.md there) for the
-# recipes of today: WeatherGS on the committed fixture for seeds 0..N-1, the tolerances from their
+# current recipes: WeatherGS on the committed fixture for seeds 0..N-1, the tolerances from their
 # spread (max(3 x sample std, 1.5 x range), per metric, for the means and per view), and the margins by
 # which the injected regressions (the LED masking nothing: weathergs-no-led; the AEF passing its images
 # through: weathergs-no-aef; both replaced by plain 3DGS: 3dgs) fall below it, in spreads. Rerun it

@@ -8,7 +8,7 @@
 #   their particles fall on a synthetic depth) and the overcast bases train the LED and nothing else.
 #   The randomized assorted scenes (ASSORTED_SCENES in make-training-data.sh) are held out as well:
 #   after training, the peak rule is calibrated again on market and them together (`weathergs
-#   calibrate-led`; docs/restoration_led_scenes.md). The LED does not need them before that, so when
+#   calibrate-led`; docs/record/led_scenes.md). The LED does not need them before that, so when
 #   they are missing from TRAINING_DATA they are made beside its training, once the AEF plugins are
 #   done (`TRAINING_PART=assorted scripts/make-training-data.sh`; ASSORTED_SCENES=0 calibrates on
 #   market alone).
@@ -26,15 +26,15 @@ DATA=${2:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]
 OUT=${3:?usage: train-models.sh WEATHERGS_BINARY TRAINING_DATA OUT [ITERATIONS]}
 ITERATIONS=${4:-6000}   # the LED's iterations
 LED_WIDTH=${LED_WIDTH:-216}     # the LED's internal width (docs/restoration_led.md)
-LED_JITTER=${LED_JITTER:-0}     # its colour jitter (0.25 was tried: docs/restoration_led_record.md)
+LED_JITTER=${LED_JITTER:-0}     # its colour jitter (0.25 was tried: docs/record/led_variants.md)
 LED_BALANCE=${LED_BALANCE:-0}   # its drop-size balance (--balance-drops; 0 = off)
 LED_HELD_SCENE=${LED_HELD_SCENE:-market}
 LED_SEED=${LED_SEED:-1}       # its training seed
 LED_BATCH=${LED_BATCH:-4}     # its views per iteration
-LED_POOLING=${LED_POOLING:-none}  # its --view-pooling (measured, not adopted: docs/restoration_led_record.md, "Pooling over the views")
+LED_POOLING=${LED_POOLING:-none}  # its --view-pooling (measured, not adopted: docs/record/led_variants.md, "Pooling over the views")
 # What the assorted scenes of ASSORTED_SCENES=N (make-training-data.sh) do for the LED: calibrate (held
 # out with LED_HELD_SCENE: they calibrate the peak rule and are scored) or train (added to its
-# training data); both measured in docs/restoration_led_scenes.md.
+# training data); both measured in docs/record/led_scenes.md.
 LED_ASSORTED=${LED_ASSORTED:-calibrate}
 case $LED_ASSORTED in calibrate | train) ;; *) echo "train-models: LED_ASSORTED must be calibrate or train, not '$LED_ASSORTED'" >&2; exit 2 ;; esac
 ONLY=${ONLY:-all}

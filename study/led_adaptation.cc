@@ -156,7 +156,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   t.gradient = kAdaptGradient;
   t.progress = o.progress;
   const restoration::LedTrainRecord rec = adapted.train(examples, t);
-  use_adapted_peak_rule(adapted);
+  restoration::use_adapted_peak_rule(adapted);
   report = Json{{"method", "fine-tune on the training views with new lens drops (docs/restoration_led.md, \"Adapted to the scene\")"},
                 {"views", views},
                 {"layouts", layouts},
@@ -170,10 +170,6 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   report["passes"] = o.iterations ? Json() : Json(o.passes);  // null: the count was fixed
   report.update(adaptation_settings_json(o, views.size()));
   return adapted;
-}
-
-void use_adapted_peak_rule(restoration::LensDetector& led) {
-  if (led.adapted_peak_rule()) led.set_peak_rule(led.adapted_peak_rule());
 }
 
 Json adaptation_settings_json(const LedAdaptOptions& o, size_t train_views) {

@@ -31,7 +31,7 @@ struct LedAdaptOptions {
   // How long the fine-tune runs: `passes` over its layouts x training views examples, in whole
   // iterations of `batch` (fine_tune_iterations), unless `iterations` fixes the count. 400/56 passes
   // make 100 iterations on a quick-profile dataset (14 training views, 56 examples), where 100 scored
-  // as 300 did (docs/restoration_led_adapted.md, "Fewer iterations"), and 207 on a paper-profile one
+  // as 300 did (docs/record/led_adaptation.md, "Fewer iterations"), and 207 on a paper-profile one
   // (29 views), where a fixed 100 scored ~0.01 IoU under 300 ("Scaled with the training views").
   double passes = 400.0 / 56.0;
   std::optional<int> iterations;
@@ -59,8 +59,7 @@ inline constexpr uint64_t kAdaptSeedBase = 9000;
 // The largest layouts and iterations LedAdaptOptions accepts (the commands check their flags with them).
 inline constexpr int kMaxAdaptLayouts = 64;
 inline constexpr int kMaxAdaptIterations = 100000;
-// The fine-tune's gradient: per example, so the adapted network does not depend on the thread count
-// (batched until 2026-11-29).
+// The fine-tune's gradient: per example, so the adapted network does not depend on the thread count.
 inline constexpr restoration::LedGradient kAdaptGradient = restoration::LedGradient::kPerExample;
 inline constexpr double kAdaptRadiusMm[2] = {0.3, 1.5};
 inline constexpr double kAdaptGlassDistanceM = 0.015;
@@ -74,11 +73,6 @@ Json adapt_layout_spec(int k);
 restoration::LensDetector adapt_led(const restoration::LensDetector& base, const Dataset& dataset,
                                     const std::vector<std::string>& views, const std::vector<Image>& images,
                                     const LedAdaptOptions& options, Json& report);
-
-// The adapted network's maps peak differently from the base's: detect cuts them with the rule the
-// weights store for adapted maps (`adapted_peak_rule`, calibrate-led --adapted) when they have one.
-// Sets `led`'s peak rule to it; leaves `led` as it is otherwise.
-void use_adapted_peak_rule(restoration::LensDetector& led);
 
 // The options that decide the adapted network of a dataset with `train_views` training views, as
 // adapt_led's report holds them (the iteration count resolved, so `passes` and a fixed count that

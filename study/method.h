@@ -32,22 +32,16 @@ enum class Method {
   kWeatherGSNerf,  // "Ours-NeRF" (Table IV): the WeatherGS preprocessing (AEF -> LED averaged) on the field
   kNerfOracle,     // the radiance field on the clean images: its upper bound
 };
-const char* to_string(Method m);
-std::vector<Method> all_methods();
-// InputError naming `where` and the known names.
-Method parse_method(const std::string& name, const std::string& where);
-std::string method_description(Method m);
-
 // Distractor Gaussians per training view of the desplat method: enough footprints to cover a view
 // once (radius ~4 px at 300x200, distractors.h) and few next to a scene of 10^4-10^5 Gaussians. Set
 // before any benchmark run, not tuned on it.
 constexpr int kDesplatDistractorsPerView = 1000;
 
-// Which reconstruction a method trains.
-enum class Backend { k3dgs, kNerf };
+// Which reconstruction a method trains: 3DGS (reconstruction/) or the radiance field (nerf/).
+enum class BackendKind { k3dgs, kNerf };
 
 struct Recipe {
-  Backend backend = Backend::k3dgs;
+  BackendKind backend = BackendKind::k3dgs;
   recon::TrainImages images = recon::TrainImages::kImages;
   recon::TrainMasks masks = recon::TrainMasks::kNone;
   bool clean_points = false;  // initialize from sparse_clean/0 (clean/ triangulated) instead of sparse/0
@@ -64,7 +58,29 @@ struct Recipe {
   bool robust = false;           // the trainer's RobustFilter mask (TrainOptions::Robust::kRobustFilter)
   int distractors_per_view = 0;  // TrainOptions::distractors_per_view (desplat)
   bool in_the_wild = false;      // TrainOptions::in_the_wild (gs-w-lite)
+
+  // The weight files the method needs: the LED's stem, the learned AEF's folder.
+  constexpr bool needs_led_weights() const { return lens_detector; }
+  constexpr bool needs_aef_weights() const { return particle_filter && aef == restoration::FilterMethod::kLearned; }
 };
+
+// One row per method: everything the program knows about it has this one home.
+struct MethodSpec {
+  Method method;
+  const char* name;         // the --method name, results.json's "method"
+  const char* description;  // results.json's method_info.method_description and the --method help
+  Recipe recipe;
+  // A reference line rather than a competitor (oracles, ground-truth masks): never bolded, listed
+  // last (evaluator/leaderboard.h is_reference_method, which tests/study checks against this column).
+  bool reference;
+};
+
+const MethodSpec& spec(Method m);
+const char* to_string(Method m);
+std::vector<Method> all_methods();
+// InputError naming `where` and the known names.
+Method parse_method(const std::string& name, const std::string& where);
+std::string method_description(Method m);
 Recipe recipe(Method m);
 
 }  // namespace weathergs::study

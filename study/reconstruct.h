@@ -28,8 +28,8 @@
 #include "nerf/run.h"
 #include "reconstruction/run.h"
 #include "restoration/detect_dataset.h"
-#include "study/led_adaptation.h"
 #include "restoration/particle_filter.h"
+#include "study/led_adaptation.h"
 #include "study/method.h"
 
 namespace weathergs::study {
@@ -44,21 +44,15 @@ struct ReconstructOptions {
   std::string dataset;
   std::string out;
   Method method = Method::k3dgs;
-  int iterations = 30000;  // 3DGS iterations (radiance-field methods: nerf.iterations)
-  uint64_t seed = 0;
-  int random_init_count = 50000;  // Gaussians of the random initialization (when no SfM points)
-  // The masked loss's normalisation (reconstruction/loss.h); matters for methods with loss masks.
-  recon::MaskNormalization mask_normalization = recon::MaskNormalization::kValid;
-  // What the large-Gaussian prune's threshold is a fraction of (recon::TrainOptions::LargePrune).
-  recon::TrainOptions::LargePrune large_prune = recon::TrainOptions{}.large_prune;
-  // When that prune starts (recon::TrainOptions::large_prune_from; scaled with the run at its default).
-  int large_prune_from = recon::TrainOptions{}.large_prune_from;
-  // desplat: TrainOptions::distractor_opacity_weight (the opacity penalty of the per-view distractors).
-  double distractor_opacity_weight = recon::TrainOptions{}.distractor_opacity_weight;
+  // The 3DGS trainer's options (3DGS methods; reconstruction/trainer.h); the method's recipe overlays
+  // what sets it apart (robust mask, distractors, in the wild). train.seed is the run's seed, the
+  // radiance field's too.
+  recon::TrainOptions train;
   int checkpoint_every = 1000;
-  // Iterations at which the test views are also scored (curve.json); those >= iterations are ignored
-  // (the final model is always a point of the curve). Each must be >= 1. Radiance-field methods score
-  // at the same fractions of their own run: it * nerf.iterations / iterations, rounded.
+  // Iterations at which the test views are also scored (curve.json), in 3DGS iterations: each is the
+  // fraction it / train.iterations of a run, which every backend scores at the same point of its own
+  // run (radiance field: it * nerf.iterations / train.iterations, rounded). Those >= train.iterations
+  // are ignored (the final model is always a point of the curve). Each must be >= 1.
   std::vector<int> eval_at;
   bool force = false;  // remove what an earlier run left at `out` and start over
   PointsPolicy points = PointsPolicy::kAuto;
@@ -73,7 +67,7 @@ struct ReconstructOptions {
   // Adapt the LED to the dataset before it runs (`detect --adapt`; docs/restoration_led.md, "Adapted to
   // the scene"). Unset: the weights as they are. Ignored by weathergs-per-view (drops that move).
   std::optional<LedAdaptOptions> led_adapt;
-  // Radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle); its seed is `seed`.
+  // Radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle); its seed is train.seed.
   nerf::NerfOptions nerf;
 
   void validate() const;  // InputError naming the field

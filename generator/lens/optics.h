@@ -10,7 +10,7 @@ namespace weathergs::lens {
 // Water at 20 C for visible light (Hale & Querry 1973: 1.333 at 589 nm).
 constexpr double kWaterRefractiveIndex = 1.333;
 // Crown glass (Schott N-BK7: 1.5168 at 587.6 nm), the cover glass of camera modules; the Cycles
-// lens reference's default plate (benchmarks/README.md, "The cover glass and the camera's body").
+// lens reference's default plate (docs/record/cycles_validation.md, "The cover glass and the camera's body").
 constexpr double kCrownGlassRefractiveIndex = 1.52;
 
 // Mirror reflection of direction d about unit normal n (either orientation).

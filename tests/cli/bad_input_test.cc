@@ -1,4 +1,4 @@
-// The bad-input corpus (issue "code health", reliability): every command of the real binary fed
+// The bad-input corpus (reliability): every command of the real binary fed
 // malformed and unknown-key JSON, wrong types and ranges, truncated and corrupt images, NaN depth, size
 // mismatches, missing files, unwritable outputs, absurd parameters and a run folder from another
 // version. Each case must exit 2, name the file / key / view in its message, and leave nothing at the

@@ -25,7 +25,7 @@ namespace weathergs {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr int kTrials = 20;  // per command (the minimum)
+constexpr int kTrials = 20;  // per command (the required minimum)
 
 // Starts `weathergs args` and kills it with SIGKILL after `delay_s`; returns true if it was still
 // running (killed), false if it had finished.

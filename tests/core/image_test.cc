@@ -57,8 +57,8 @@ TEST(ImageTest, ExrIsLinearAndDepthChannelZ) {
   for (size_t i = 0; i < depth.data.size(); ++i) EXPECT_EQ(back.data[i], depth.data[i]);
 }
 
-// Regression (bad-input corpus): a negative depth was accepted, and `weather` then silently left the
-// fog out of those pixels (exit 0).
+// Bad-input corpus: a non-positive depth must be refused, since `weather` would otherwise silently
+// leave the fog out of those pixels (exit 0).
 TEST(ImageTest, NonPositiveDepthIsAnInputErrorNamingThePixel) {
   TempDir dir;
   for (const float bad : {-2.5f, 0.f, -INFINITY}) {

@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 using testing::TempDir;
 
 // Median relative depth error allowed after alignment: a 1500-iteration 3DGS of 12 views at 320x240
-// reproduces the textured planes to a few percent (measured 4.4% on 2026-11-22, benchmarks/README.md);
+// reproduces the textured planes to a few percent (measured 4.4%, benchmarks/README.md);
 // COLMAP's mapper is not deterministic, so the bar leaves room.
 constexpr double kMedianRelativeDepthError = 0.08;
 

@@ -18,7 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::TempDir;
 
-// The bar for where Blender draws a projected point.
+// The required bar for where Blender draws a projected point.
 constexpr double kMaxMarkerErrorPx = 0.5;
 // A ray through a pixel near the marker's center hits its sphere, so the unprojected depth lies on
 // the sphere: distance to the center = radius up to float32 depth and mesh faceting (32x16 UV sphere:

@@ -1,4 +1,4 @@
-// The physical weather layer against Cycles (issue 10 §1), on the tiny profile with looser bounds than
+// The physical weather layer against Cycles, on the tiny profile with looser bounds than
 // the benchmark's (benchmarks/README.md, "Path-tracer validation": quick profile, 1024 samples):
 // fewer pixels and samples leave more Monte Carlo noise in the reference. ~3 min: labelled slow.
 #include <gtest/gtest.h>
@@ -19,20 +19,19 @@ namespace fs = std::filesystem;
 using testing::TempDir;
 
 // At the quick profile and 1024 samples the benchmark needs >= 6 dB, +-20% energy, 2 px; 256 samples
-// at 192x128 raise the reference's noise floor and put fewer particles in view. Measured here
-// (2026-11-25): rain 100 mm/h +5.7 dB, energy 1.03, streak ends 2.0 px; snow 10 mm/h +9.9 dB, 0.89,
-// 0.3 px (cutoff 0.01; at the 0.002 of the physical default since that evening: +10.3 dB, 0.95). With
-// the instanced, area-scaled reference spheres (2026-11-26; the former ones were 7 % short of area):
-// rain +5.8 dB, 0.96; snow at 0.002 +10.0 dB, 0.88. The former weighted shading gives rain +3.6 dB, 1.21, 3.0 px and snow +6.3 dB, 0.67: each
-// fails at least two of these bounds (checked by running this test with it).
+// at 192x128 raise the reference's noise floor and put fewer particles in view. Measured here with the
+// instanced, area-scaled reference spheres: rain 100 mm/h +5.8 dB, energy 0.96, streak ends 2.0 px;
+// snow 10 mm/h at the physical default cutoff 0.002 +10.0 dB, 0.88 (0.3 px at cutoff 0.01). The
+// paper-style weighted shading gives rain +3.6 dB, 1.21, 3.0 px and snow +6.3 dB, 0.67: each fails
+// at least two of these bounds (checked by running this test with it), so they tell the two apart.
 constexpr double kMinGainRainDb = 4.5, kMinGainSnowDb = 8.0;
 constexpr double kEnergyRatioLo = 0.75, kEnergyRatioHi = 1.15;
 constexpr double kMaxMedianStreakErrorPx = 2.5;
 // The extents measured on the particles' coverage (Cycles' coverage render against the generator's
-// alpha layers), free of shading: at the quick profile the median is within 1 px (2026-11-25). Since
-// the coverage view has 8x the samples and only streaks clear along their whole path are compared
-// (2026-11-26), every streak's ends agree: here median 0.82 / max 1.00 px over 10 rain streaks, at
-// the quick profile 0.24-0.81 / 1.19-1.24 px (benchmarks/README.md; 2.9-4.1 px before at worst).
+// alpha layers), free of shading: at the quick profile the median is within 1 px. Because the
+// coverage view has 8x the samples and only streaks clear along their whole path are compared, every
+// streak's ends agree: here median 0.82 / max 1.00 px over 10 rain streaks, at the quick profile
+// 0.24-0.81 / 1.19-1.24 px (benchmarks/README.md; 2.9-4.1 px at worst without those two measures).
 constexpr double kMaxMedianCoverageStreakErrorPx = 1.5, kMaxCoverageStreakErrorPx = 2.5;
 
 std::string scene_path(const std::string& name) { return std::string(WEATHERGS_SOURCE_DIR) + "/scenes/" + name; }
@@ -59,8 +58,8 @@ Json physical_spec(const char* species, double rate, double sun_strength) {
 
 // min_streaks: streaks the tool must find clear of the others to compare their ends. Physical snow
 // draws its whole population down to a 0.002 cutoff (60,045 flakes in this view), where no flake's
-// capsule is more than half its own: its streak ends cannot be compared at the default (they were
-// at the earlier 0.01 cutoff: 0.3 px), so snow asks for none and checks the ends only if found.
+// capsule is more than half its own: its streak ends cannot be compared at the default (at a 0.01
+// cutoff they agree to 0.3 px), so snow asks for none and checks the ends only if found.
 void validate(const TempDir& tmp, const std::string& variant, const char* species, double rate, double sun,
               double min_gain_db, int min_streaks) {
   if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
@@ -104,14 +103,14 @@ TEST(CyclesValidation, HeavySnowAgreesWithThePathTracer) {
 
 // Lens drops, physical style (the camera's dark front takes the light sent back towards it; unfollowed
 // paths lit by the sky), defocused by the camera's lens, against caps on a 1 mm cover glass in front of
-// a camera body (the reference's defaults). Measured here (2026-11-25, the thin glass of the time):
-// +7.5 dB over an empty layer, changed-region IoU 0.70, energy 1.10 (quick profile, 128 samples:
-// +7.0 dB, 0.76, 1.10). With the 1 mm slab, the physical default since that evening: +9.6 dB, IoU 0.75,
-// energy 1.04 here (the thin glass on the same renders +7.5 dB; quick profile +8.9 dB, 1.04). The generator
-// before camera_radiance (sky for that light): -2.6 dB here, -2.7 dB at the quick profile (checked
-// below on the same renders). Through a pinhole (`"defocus": false`) the same drops score +2.9 dB
-// here: the thin-glass approximation shows once the drops are sharp (docs/lens_droplets.md). The reference with its caps' normals facing inward (a bug
-// this test was first written against) scored -2.2 dB through a pinhole.
+// a camera body (the reference's defaults). Measured here with the 1 mm slab (the physical default):
+// +9.6 dB over an empty layer, changed-region IoU 0.75, energy 1.04 (quick profile, 128 samples:
+// +8.9 dB, 1.04); with the thin glass +7.5 dB, IoU 0.70, energy 1.10 (quick profile +7.0 dB, 0.76,
+// 1.10). The generator without camera_radiance (sky for that light): -2.6 dB here, -2.7 dB at the
+// quick profile (checked below on the same renders). Through a pinhole (`"defocus": false`) the same
+// drops score +2.9 dB here: the thin-glass approximation shows once the drops are sharp
+// (docs/lens_droplets.md). A reference with its caps' normals facing inward (a bug these bounds
+// catch) scores -2.2 dB through a pinhole.
 constexpr double kMinLensGainDb = 4.0, kMinLensChangedIou = 0.6;
 constexpr double kLensEnergyLo = 0.75, kLensEnergyHi = 1.3;
 

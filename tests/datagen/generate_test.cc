@@ -26,7 +26,7 @@ using testing::TempDir;
 // cameras.json rotations come from Blender's float32 matrices (orthonormal to ~1e-7); COLMAP stores a
 // unit quaternion, i.e. the nearest rotation. A convention error (axes, inverse) would be O(1).
 constexpr double kPoseAgreement = 1e-6;
-// The bar for the exported model.
+// The required bar for the exported model.
 constexpr double kMaxReprojectionErrorPx = 1.0;
 
 std::string scene_path(const std::string& name) { return std::string(WEATHERGS_SOURCE_DIR) + "/scenes/" + name; }
@@ -39,7 +39,7 @@ double mean_abs_diff(const Image& a, const Image& b) {
 
 // COLMAP reads the model, its reprojection error is small, and it agrees with cameras.json.
 // min_points: the clean tiny views give > 20 points; the paper-style heavy rain with lens drops
-// hides most features at 192x128 (12 points measured on 2026-11-22), so its model needs only a few.
+// hides most features at 192x128 (12 points measured), so its model needs only a few.
 void check_model(const std::string& model_dir, const std::vector<Camera>& cameras, const ColmapOptions& o,
                  int min_points) {
   const ModelStats s = analyze_model(model_dir, o, model_dir + "/../analyzer.log");
@@ -201,9 +201,9 @@ TEST(GenerateTest, TinyRainVariantEndToEnd) {
 }
 
 // Five 192x128 snowy views of pool share no feature COLMAP can triangulate, and COLMAP 3.8's
-// point_triangulator then aborts in its final bundle adjustment (exit 134); generate used to fail
-// with it (`make demo`, 2026-11-23). An empty triangulation is a result: the model keeps the known
-// poses and has no points, and reconstruct falls back to its random initialization.
+// point_triangulator then aborts in its final bundle adjustment (exit 134), which must not fail
+// generate (`make demo` makes this variant). An empty triangulation is a result: the model keeps the
+// known poses and has no points, and reconstruct falls back to its random initialization.
 TEST(GenerateTest, TinySnowVariantGeneratesEvenWhenNothingTriangulates) {
   if (!have_blender_and_colmap()) GTEST_SKIP() << "blender or colmap not installed";
   TempDir tmp;

@@ -1,5 +1,5 @@
 // The quick suite through the CLI, from an empty cache: six complete datasets whose COLMAP exports
-// are readable and accurate. Labelled slow; the time budget (one variant < 3 min, the suite
+// are readable and accurate. Labelled slow; the required time budget (one variant < 3 min, the suite
 // < 15 min on 2 idle cores) is measured and recorded in benchmarks/README.md, and printed here.
 #include <gtest/gtest.h>
 
@@ -17,8 +17,8 @@ namespace weathergs::datagen {
 namespace {
 
 using testing::TempDir;
-constexpr double kMaxReprojectionErrorPx = 1.0;  // the bar
-// SfM points: the clean views give 520-1000 (data/suite_paper, 2026-11-26), so 200 says the scenes
+constexpr double kMaxReprojectionErrorPx = 1.0;  // the required bar
+// SfM points: the clean views give 520-1000 (data/suite_paper), so 200 says the scenes
 // are textured enough to reconstruct. The weathered views carry the paper-style weather, which is
 // meant to hurt (docs/scenes.md): their models keep 17-46% of the clean points (124-328 over two
 // generations, tanabata_rain lowest) with every view registered, and 3DGS trains from such a cloud

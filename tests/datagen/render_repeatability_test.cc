@@ -1,4 +1,4 @@
-// Clean images must be noise-free: two renders of one view agree to at least 40 dB PSNR (the issue's
+// Clean images must be noise-free: two renders of one view agree to at least 40 dB PSNR (the required
 // bar). EEVEE has no sampling seed; two separate Blender processes are the repeat that matters
 // (thread timing in llvmpipe is the only source of differences). The second one runs capped at one
 // thread (BlenderOptions::threads, `weathergs -j 1 generate`): the cap must not change the image.
@@ -16,7 +16,7 @@ namespace weathergs::datagen {
 namespace {
 
 using testing::TempDir;
-constexpr double kMinRepeatPsnrDb = 40.0;  // the bar for clean ground truth
+constexpr double kMinRepeatPsnrDb = 40.0;  // the required bar for clean ground truth
 
 TEST(RenderRepeatabilityTest, TwoProcessesAgree) {
   if (find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";

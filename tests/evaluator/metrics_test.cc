@@ -14,9 +14,9 @@
 namespace weathergs::evaluator {
 namespace {
 
-// scikit-image and our SSIM both accumulate in double; the issue asks for agreement to 1e-5.
+// scikit-image and our SSIM both accumulate in double; agreement to 1e-5 is required.
 constexpr double kSsimReferenceTol = 1e-5;
-// LPIPS: float32 network; the reference README expects ~1e-6 between implementations, the issue 1e-4.
+// LPIPS: float32 network; the reference README expects ~1e-6 between implementations, we require 1e-4.
 constexpr double kLpipsReferenceTol = 1e-4;
 // Pixels are float32 (k/255 rounded to 24 bits), the reference float64: MSE differs by ~1e-7
 // relative, i.e. ~5e-7 dB.

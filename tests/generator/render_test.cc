@@ -69,7 +69,7 @@ double measured_length_px(const ParticleRaster& r) {
 }
 
 TEST(Render, StreakLengthIsFocalTimesPerpendicularSpeedTimesExposureOverDepth) {
-  // Tolerance from the issue: 2%.
+  // The required tolerance: 2%.
   constexpr double kLengthTolerance = 0.02;
   for (StreakMode mode : {StreakMode::kAnalytic, StreakMode::kTimeSamples}) {
     for (double z : {3.0, 5.0, 8.0}) {

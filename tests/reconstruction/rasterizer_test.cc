@@ -441,7 +441,7 @@ TEST(RasterizerTest, EveryKernelWidthGivesTheSameBits) {
 // An image-only forward (RasterOutputs::kImage: renders of test views) matches the training forward's
 // image up to rounding: its block power is in Horner form and at 8 lanes with FMA it is fused
 // (raster_image_simd.cc). Tolerances: rounding alone moves a pixel by a few float ulps (measured max
-// 4e-7 over six random scenes, 2026-11-27), so the mean stays under kMeanTolerance. Where rounding
+// 4e-7 over six random scenes), so the mean stays under kMeanTolerance. Where rounding
 // decides a cut-off differently, the pixel moves by more: at the 1/255 cut-off by at most alpha T
 // <= 1/255 (the later entries' share scales by 1 - alpha the other way), at the transmittance stop by
 // at most the transmittance T there, which is 1e-4 / (1 - alpha) <= 0.01 (alpha <= 0.99); one of each

@@ -1,5 +1,5 @@
 // The iteration schedule scales with the run length: a short run never ends on an opacity reset
-// (`train --iterations 3000` used to end right after one and render nearly black).
+// (`train --iterations 3000` must not end right after one, which renders nearly black).
 #include <gtest/gtest.h>
 
 #include <algorithm>

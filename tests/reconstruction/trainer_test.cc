@@ -295,12 +295,12 @@ TEST(TrainerTest, NanGuardNamesParameterAndStep) {
 // seen by others): with the occluder masked out, the scene is
 // recovered without it; without the mask it is baked into the model.
 // robust-3dgs must beat plain 3DGS on the occluded region by a margin well above run-to-run noise
-// (these runs are deterministic; measured +2.75 dB on 2026-11-23, see the printout).
+// (these runs are deterministic; measured +2.75 dB, see the printout).
 constexpr double kRobustGainDb = 2.0;
 // desplat must beat plain 3DGS there too (measured: see the printout and docs/reconstruction.md).
 constexpr double kDesplatGainDb = 2.0;
-// gs-w-lite's learned visibility maps must recover part of it (measured 24.17 vs 23.06 dB,
-// 2026-11-25: less than robust-3dgs, see docs/reconstruction.md "In the wild").
+// gs-w-lite's learned visibility maps must recover part of it (measured 24.17 vs 23.06 dB: less
+// than robust-3dgs, see docs/reconstruction.md "In the wild").
 constexpr double kInTheWildGainDb = 0.5;
 // ... at a bounded cost elsewhere (see below).
 constexpr double kDesplatOutsideLossDb = 5.0;
@@ -367,13 +367,13 @@ TEST(TrainerTest, MaskedOccluderIsNotReconstructed) {
     if (v == 0) std::printf("gs-w-lite visibility, view 0: %.3f on the occluder, %.3f elsewhere\n", in / nin, out / nout);
   }
   EXPECT_GT(psnr_masked, 28.0);
-  // Measured 31.4 vs 23.1 dB (2026-11-23): multi-view consistency already fights the unmasked
+  // Measured 31.4 vs 23.1 dB: multi-view consistency already fights the unmasked
   // occluder, the mask removes it; the robust mask, with no mask given, recovers part (25.8 dB).
   EXPECT_GT(psnr_masked, psnr_unmasked + 5.0);
   EXPECT_GT(psnr_robust, psnr_unmasked + kRobustGainDb);
   EXPECT_GT(psnr_desplat, psnr_unmasked + kDesplatGainDb);
   // The price: outside the occluder the distractors take some scene content (measured 34.38 vs 37.77
-  // dB, 2026-11-24, with the opacity penalty; 28.2 dB without it). On whole images desplat must still
+  // dB with the opacity penalty; 28.2 dB without it). On whole images desplat must still
   // be ahead of plain training (measured 33.42 vs 32.44 dB).
   std::vector<TrainView> rest = clean;
   for (size_t v = 0; v < rest.size(); ++v) rest[v].invalid = masked[v].invalid;

@@ -76,7 +76,7 @@ TEST(AefPluginTest, ShapesRangeAndParameterCount) {
   const int64_t expect = (7 * c * 9 + c) + (c * 2 * c * 9 + 2 * c) + (2 * c * b * 9 + b) + a.residual_blocks * 2 * (b * b * 9 + b) +
                          ((b + 2 * c) * 2 * c * 9 + 2 * c) + (3 * c * c * 9 + c) + (c * 4 + 4);
   EXPECT_EQ(p.parameter_count(), expect);
-  EXPECT_LT(p.parameter_count(), 300000);  // issue 11: a few hundred thousand at most
+  EXPECT_LT(p.parameter_count(), 300000);  // the size budget: a few hundred thousand at most
   for (auto [w, h] : {std::pair{90, 61}, std::pair{33, 17}}) {  // odd sizes: the decoder meets its skips
     const AefExample e = toy_view(w, h, 3, 0, WeatherClass::kRain);
     const AefOutput out = p.restore(e.image, "toy");

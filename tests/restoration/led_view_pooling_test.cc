@@ -1,4 +1,4 @@
-// The LED's pooling over the views of one dataset (LedViewPooling, docs/restoration_led_record.md, "Pooling
+// The LED's pooling over the views of one dataset (LedViewPooling, docs/record/led_variants.md, "Pooling
 // over the views"): what a pooled network shares between the views of a call, how it trains on
 // groups, its weights format, and `detect` running it on the dataset's views together.
 #include <gtest/gtest.h>

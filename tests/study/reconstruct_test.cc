@@ -44,9 +44,9 @@ ReconstructOptions options(const std::string& data, const std::string& out, Meth
   o.dataset = data;
   o.out = out;
   o.method = m;
-  o.iterations = 200;
-  o.seed = 2;
-  o.random_init_count = 2000;
+  o.train.iterations = 200;
+  o.train.seed = 2;
+  o.train.random_init_count = 2000;
   o.checkpoint_every = 50;
   o.points = PointsPolicy::kDataset;  // no COLMAP: the random initialization (fast, deterministic)
   o.scoring.lpips = false;
@@ -77,11 +77,11 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
     std::vector<std::string> stages;
     int iterations_seen = 0;
     ReconstructOptions o = options(data, out, m);
-    const bool nerf = recipe(m).backend == Backend::kNerf;
+    const bool nerf = recipe(m).backend == BackendKind::kNerf;
     if (m == Method::kNerf) o.eval_at = {100};  // half of the 3DGS run: iteration 40 of the field's 80
     const ReconstructResult r = reconstruct(
         o, [&](const recon::IterationStats&) { ++iterations_seen; }, [&](const std::string& s) { stages.push_back(s); });
-    EXPECT_EQ(iterations_seen, nerf ? o.nerf.iterations : o.iterations);
+    EXPECT_EQ(iterations_seen, nerf ? o.nerf.iterations : o.train.iterations);
     if (m == Method::kNerf) {
       const Json c = read_json_file(out + "/curve.json");
       ASSERT_EQ(c.at("points").size(), 2u) << c.dump();
@@ -126,7 +126,7 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
   // checked is the order that holds with margin here: the oracle trains on the ground truth itself and
   // beats every 3DGS method that sees the weather by more than kOracleMarginDb.
   for (const auto& [m, p] : psnr)
-    if (recipe(m).backend == Backend::k3dgs && m != Method::kOracle) {
+    if (recipe(m).backend == BackendKind::k3dgs && m != Method::kOracle) {
       EXPECT_GT(psnr[Method::kOracle] - p, kOracleMarginDb) << to_string(m);
     }
 }
@@ -339,10 +339,10 @@ TEST(ReconstructTest, EveryStageReusesOnlyOutputsMadeWithItsSettings) {
   // The 3DGS model (model/): another seed is another model.
   fs::remove(tmp / "tophat/results.json");
   ReconstructOptions other_seed = tophat;
-  other_seed.seed = 3;
+  other_seed.train.seed = 3;
   expect_refused(other_seed, "3DGS model", "options.seed");
   ReconstructOptions longer = tophat;
-  longer.iterations = 250;
+  longer.train.iterations = 250;
   expect_refused(longer, "3DGS model", "options.iterations");
   EXPECT_FALSE(ran(stages_of(tophat), "training"));  // complete with the same options: kept
   // The radiance field (model/ of the nerf backend).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The frozen references of the convergence study (docs/reconstruction.md, "Schedules"): today's trainer
+# The frozen references of the convergence study (docs/reconstruction.md, "Schedule for short runs"): the trainer as it stands
 # (the 30,000-iteration reference schedule) once per cell, with snapshots, one thread per run.
 # Resumable: a run stopped part way resumes from its last checkpoint when the script runs again (the
 # checkpoint keeps the training seconds, so C stays the training time of one uninterrupted run).

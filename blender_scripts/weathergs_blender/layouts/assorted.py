@@ -1,6 +1,6 @@
 """Scene type "assorted" (a training scene of the restoration part, never a benchmark scene): a
 randomized street of mixed structure, drawn from the spec's seed, so that many seeds give the lens-drop
-detector backgrounds it has not learned by heart (docs/restoration_led_scenes.md).
+detector backgrounds it has not learned by heart (docs/record/led_scenes.md).
 Every draw mixes buildings at several depths, thin structure against the sky (poles, lattice frames,
 cables, fences), rounded things (tanks, trees) and clutter near the camera. Its materials are the
 spec's generic ones (ground, ground2, wall0..wall3, metal0, metal1, accent0, accent1, foliage, bark,

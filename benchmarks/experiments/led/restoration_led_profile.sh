@@ -1,24 +1,24 @@
 #!/usr/bin/env bash
 # The LED (the shipped weights, or LED_WEIGHTS=STEM) on the benchmark scenes at one render profile
-# (docs/restoration_led_targets.md, "The LED at the paper profile"). Generates the rain variants of both
+# (docs/restoration_led.md, "Current numbers": the paper-profile rows). Generates the rain variants of both
 # styles and the paper-style snow variants of tanabata, factory and pool at PROFILE (no COLMAP, with
 # the restoration targets; the clean renders come from the generate cache, so a second run only
 # re-weathers), runs `weathergs detect` on each (the default post-processing: the training views'
 # averaged map, the weights' peak rule, three 3x3 dilations) and prints one row per variant: IoU /
 # precision / recall against masks/lens pooled over the training views, or, for the drop-free snow
 # variants, the share of pixels masked. Existing datasets in OUT are reused.
-# Usage: restoration_led_profile.sh WEATHERGS OUT [PROFILE=paper] > table.md
-# OUT is laid out like the repository root for the other LED scripts: datasets in
+# Usage: benchmarks/experiments/led/restoration_led_profile.sh WEATHERGS OUT [PROFILE=paper] > table.md
+# OUT is laid out like the repository root, so that the drop-layout script reads its suite
+# (restoration_led_layouts.py WEATHERGS OUT2 --suite OUT/data/suite_paper): datasets in
 # OUT/data/suite_<style>/<scene>_<weather>, masks and averaged maps (--save-attention) of the rain
-# variants in OUT/masks/<style>_<scene>, so that `cd OUT && restoration_led_gap.py masks` and
-# `restoration_led_faint.py masks` read them; the snow variants' masks go to OUT/masks_snow/.
+# variants in OUT/masks/<style>_<scene>, the snow variants' masks in OUT/masks_snow/.
 # The paper profile (600x400, 34 views, 29 of them training views) renders each scene in Blender once
-# per surface state: ~5-9 min per scene on 2 cores (2026-11-27), ~45 min for all six renders.
+# per surface state: ~5-9 min per scene on 2 cores, ~45 min for all six renders.
 set -euo pipefail
 WGS=$(readlink -f "$1")
 OUT=$2
 PROFILE=${3:-paper}
-HERE=$(cd "$(dirname "$0")/.." && pwd)
+HERE=$(cd "$(dirname "$0")/../../.." && pwd)  # the repository root
 mkdir -p "$OUT"
 echo "| variant | style | IoU / precision / recall | masked | seconds (generate) |"
 echo "|---|---|---|---:|---:|"

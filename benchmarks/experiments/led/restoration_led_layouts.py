@@ -1,6 +1,5 @@
 #!/usr/bin/python3
-"""The LED on many drop layouts of the benchmark scenes (issue 11; docs/restoration_led_targets.md,
-"One drop layout").
+"""The LED on many drop layouts of the benchmark scenes (docs/restoration_led.md, "Current numbers").
 
 The three paper-style rain variants use the same weather seed (7), and the lens drops are fixed to the
 lens, so all three carry the same 20 drops: the benchmark scores the LED on one drop layout seen over
@@ -25,7 +24,7 @@ import sys
 import numpy as np
 
 SCENES = ("pool", "tanabata", "factory")
-TARGET_IOU, TARGET_PRECISION = 0.7, 0.8  # the LED's mask targets (docs/restoration_led_targets.md)
+TARGET_IOU, TARGET_PRECISION = 0.7, 0.8  # the LED's mask targets (docs/restoration_led.md)
 
 
 def rain_spec(scene):

@@ -5,7 +5,7 @@
 # (`--method learned --task auto`: the selector picks derain, desnow or none per scene); what each does
 # to clear views (the clean images, against themselves); and the selector's choices on the weathered and
 # the clean images, per scene and per view.
-# Usage: benchmarks/restoration_aef.sh WEATHERGS SUITE_DIR [OUT] [WEIGHTS_DIR]
+# Usage: benchmarks/experiments/restoration/restoration_aef.sh WEATHERGS SUITE_DIR [OUT] [WEIGHTS_DIR]
 #   EVAL=BINARY: the weathergs that runs `evaluate` (a build with the evaluator part; default WEATHERGS).
 set -euo pipefail
 W=${1:?usage: restoration_aef.sh WEATHERGS SUITE_DIR [OUT] [WEIGHTS]}

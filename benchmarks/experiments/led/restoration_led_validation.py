@@ -1,11 +1,11 @@
 #!/usr/bin/python3
-"""Scores LED weights on the validation scenes station and village (issue 11; docs/restoration_led_scenes.md,
-"A third draw"), and with --against compares two draws of the LED recipe the way the shipped one was chosen.
+"""Scores LED weights on the validation scenes station and village (docs/restoration_led.md, "Current
+numbers"), and with --against compares two LED variants by the rule that chooses between them.
 
 The validation scenes are no benchmark scene, and no network is trained on them, so they can choose between
-draws of the recipe without choosing on the benchmark. Since 2026-11-28 (late night) the rule `detect --adapt`
-cuts its maps with is calibrated on them (`make adapted-led-rule`), so an --adapt reading here is in-sample for
-that rule. Make them once (an OUT of their own):
+LED variants without choosing on the benchmark. The rule `detect --adapt` cuts its maps with is calibrated
+on them (`make adapted-led-rule`), so an --adapt reading here is in-sample for that rule. Make them once
+(an OUT of their own):
 
     TRAINING_PART=validation scripts/make-training-data.sh build/apps/weathergs data/validation 12 quick
 
@@ -13,8 +13,9 @@ This script runs `weathergs detect --data D --weights W` (the default post-proce
 VALIDATION (<scene>_wNN) and prints IoU / precision / recall against masks/lens (as detect.json reports them)
 per dataset, the means over the datasets with drops, per scene and over both, and the largest fraction of a
 drop-free dataset's pixels masked. With --against W2 it scores W2 the same way and prints the mean paired
-difference of the IoU (W minus W2) with its standard error, and the verdict of the rule set before the
-third draw was read: the higher mean IoU wins, within --margin (0.005) the incumbent (W2) stays.
+difference of the IoU (W minus W2) with its standard error, and the verdict of the choosing rule (fixed
+before any reading, so that the reading cannot move it): the higher mean IoU wins, within --margin (0.005)
+the incumbent (W2) stays.
 
 With --adapt the first weights run as `detect --adapt` (docs/restoration_led.md, "Adapted to the scene"):
 `--adapt --against models/led/led` compares the adapted LED with the same weights as they are.

@@ -2,7 +2,7 @@
 # The classical particle filter (weathergs filter) on a generated suite: PSNR/SSIM of the train views
 # against the no-particle target (particles removed, lens drops kept), before and after filtering, and
 # what the filter does to clear views (the clean images filtered, against themselves).
-# Usage: benchmarks/restoration_filter.sh WEATHERGS SUITE_DIR [OUT]   (datasets need generate --targets)
+# Usage: benchmarks/experiments/restoration/restoration_filter.sh WEATHERGS SUITE_DIR [OUT]   (datasets need generate --targets)
 set -euo pipefail
 W=${1:?usage: restoration_filter.sh WEATHERGS SUITE_DIR [OUT]}
 SUITE=${2:?usage: restoration_filter.sh WEATHERGS SUITE_DIR [OUT]}
