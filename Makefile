@@ -95,7 +95,7 @@ interop: build
 	  cd interop && npm ci --no-audit --no-fund; fi
 	bash interop/run.sh $(BUILD)
 
-# The benchmark suite (workflow/Snakefile, docs/study.md): SUITE_CONFIG="profile=quick iterations=7000 ..."
+# The benchmark suite (workflow/Snakefile, docs/methods.md): SUITE_CONFIG="profile=quick iterations=7000 ..."
 SUITE_CONFIG ?=
 suite: build
 	USER=$${USER:-weathergs} snakemake -s workflow/Snakefile --cores $(JOBS) \
@@ -113,7 +113,7 @@ test-slow: build
 # The suite on a real one-node Slurm started by the test (docs/cluster.md); needs root. Skips are failures here.
 test-slurm: build
 	bash scripts/install-deps.sh slurm
-	cd $(BUILD) && ctest --output-on-failure -R '^study/slurm$$' | tee ctest-slurm.log; \
+	cd $(BUILD) && ctest --output-on-failure -R '^methods/slurm$$' | tee ctest-slurm.log; \
 	  status=$${PIPESTATUS[0]}; if grep -q '\*\*\*Skipped' ctest-slurm.log; then exit 1; fi; exit $$status
 
 # CI's regression check by hand: WeatherGS on the committed fixture against benchmarks/baselines/regression/.

@@ -39,7 +39,7 @@ Command make_leaderboard(CLI::App& root) {
   sub->add_option("-o,--output", args->output, "Output file (default: stdout)");
   sub->add_flag("--paper", args->paper,
                 "The paper's four tables: I snow, II rain (oracle and gt-masks as reference lines), III the "
-                "ablation averaged over all variants, IV the cost per method (docs/study.md)");
+                "ablation averaged over all variants, IV the cost per method (docs/methods.md)");
   return {sub, [args] { return run_leaderboard(*args); }};
 }
 

@@ -15,7 +15,7 @@ struct WeatherArgs {
   int64_t seed = -1;
   bool no_layers = false, no_manifest = false, targets = false;
   std::string style;
-  double mask_threshold = WeatherRunOptions().mask_threshold;
+  double mask_threshold = generator::WeatherRunOptions().mask_threshold;
 };
 
 Command make_weather(CLI::App& root) {
@@ -42,15 +42,15 @@ Command make_weather(CLI::App& root) {
   sub->add_option("--style", a->style, "Override the spec's style: physical (ignores paper blocks) or paper")
       ->check(CLI::IsMember({"physical", "paper"}));
   return {sub, [a] {
-            WeatherRunOptions o;
+            generator::WeatherRunOptions o;
             if (a->seed >= 0) o.seed = uint64_t(a->seed);
             o.name = a->name;
             o.write_layers = !a->no_layers;
             o.write_manifest = !a->no_manifest;
             o.mask_threshold = a->mask_threshold;
             o.write_targets = a->targets;
-            if (!a->style.empty()) o.style = a->style == "paper" ? WeatherStyle::kPaper : WeatherStyle::kPhysical;
-            const Json block = run_weather(a->in, JsonReader::from_file(a->spec), a->out, o);
+            if (!a->style.empty()) o.style = a->style == "paper" ? generator::WeatherStyle::kPaper : generator::WeatherStyle::kPhysical;
+            const Json block = generator::run_weather(a->in, JsonReader::from_file(a->spec), a->out, o);
             if (!is_quiet()) {
               std::fprintf(stderr, "wrote %s (seed %s):", a->out.c_str(), block["seed"].dump().c_str());
               for (const Json& s : block["stages"])

@@ -8,8 +8,8 @@
 namespace weathergs::cli {
 namespace {
 
-int run_render(const recon::RenderRunOptions& o) {
-  const recon::RenderRunResult r = recon::render_run(o);
+int run_render(const reconstruction::RenderRunOptions& o) {
+  const reconstruction::RenderRunResult r = reconstruction::render_run(o);
   if (!is_quiet())
     std::fprintf(stderr, "rendered %d views of split '%s' in %.2f s into %s\n", r.views, o.split.c_str(),
                  r.render_seconds, o.out.c_str());
@@ -17,7 +17,7 @@ int run_render(const recon::RenderRunOptions& o) {
 }
 
 Command make_render(CLI::App& root) {
-  auto o = std::make_shared<recon::RenderRunOptions>();
+  auto o = std::make_shared<reconstruction::RenderRunOptions>();
   CLI::App* sub = root.add_subcommand("render", "Render a trained 3DGS run (PNG per view + info.json)");
   sub->add_option("--model", o->model, "Run folder written by `weathergs train`")->required();
   sub->add_option("--split", o->split, "Dataset split to render (or all: every view)")->capture_default_str();

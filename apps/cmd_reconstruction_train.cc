@@ -10,21 +10,21 @@ namespace weathergs::cli {
 namespace {
 
 struct TrainArgs {
-  recon::TrainRunOptions run;
+  reconstruction::TrainRunOptions run;
   std::string images = "images", masks = "none";
   TrainFlags train;
   CLI::App* app = nullptr;
 };
 
 int run_train(TrainArgs& args) {
-  recon::TrainRunOptions o = args.run;
-  o.inputs.images = recon::parse_train_images(args.images, "--images");
-  o.inputs.masks = recon::parse_train_masks(args.masks, "--masks");
+  reconstruction::TrainRunOptions o = args.run;
+  o.inputs.images = reconstruction::parse_train_images(args.images, "--images");
+  o.inputs.masks = reconstruction::parse_train_masks(args.masks, "--masks");
   args.train.apply(o.train);
   if (o.resume) {
     // Start from what the run was trained with; explicitly given flags must agree (checked below
     // through the checkpoint) or extend nothing silently.
-    recon::TrainRunOptions stored = recon::read_run_options(o.out);
+    reconstruction::TrainRunOptions stored = reconstruction::read_run_options(o.out);
     auto given = [&](const char* flag) { return args.app->count(flag) > 0; };
     if (!given("--data")) o.dataset = stored.dataset;
     if (!given("--images")) o.inputs.images = stored.inputs.images;
@@ -51,7 +51,7 @@ int run_train(TrainArgs& args) {
   ProgressBar bar("train", o.train.iterations);
   double psnr_ema = 0;
   int reported = 0;
-  auto on_iteration = [&](const recon::IterationStats& st) {
+  auto on_iteration = [&](const reconstruction::IterationStats& st) {
     if (reported == 0) bar.tick(st.iteration - 1);  // resumed runs start part way
     ++reported;
     psnr_ema = reported == 1 ? st.psnr : 0.9 * psnr_ema + 0.1 * st.psnr;
@@ -63,7 +63,7 @@ int run_train(TrainArgs& args) {
     }
     bar.tick();
   };
-  const recon::TrainRunResult r = recon::train_run(o, on_iteration);
+  const reconstruction::TrainRunResult r = reconstruction::train_run(o, on_iteration);
   bar.finish();
   if (!is_quiet())
     std::fprintf(stderr, "trained %d iterations in %.1f s: %lld Gaussians, last train PSNR %.2f dB, peak RSS %.0f MiB\n",
@@ -75,7 +75,7 @@ Command make_train(CLI::App& root) {
   auto args = std::make_shared<TrainArgs>();
   CLI::App* sub = root.add_subcommand("train", "Train 3D Gaussian Splatting on a dataset's train split (CPU)");
   args->app = sub;
-  recon::TrainRunOptions& o = args->run;
+  reconstruction::TrainRunOptions& o = args->run;
   sub->add_option("--data", o.dataset, "Dataset folder (dataset.json, cameras.json, images/)");
   sub->add_option("--images", args->images, "Training images of the dataset: images (with weather) or clean")
       ->capture_default_str()->check(CLI::IsMember({"images", "clean"}));

@@ -7,7 +7,7 @@
 #include "apps/resources.h"
 #include "core/parallel.h"
 #include "restoration/detect_dataset.h"
-#include "study/led_adaptation.h"
+#include "adaptation/led_adaptation.h"
 
 namespace weathergs::cli {
 namespace {
@@ -20,7 +20,7 @@ struct DetectArgs {
   std::vector<double> peak;
   bool adapt = false;
   int adapt_iterations = 0;  // 0: from adapt_options.passes
-  study::LedAdaptOptions adapt_options;
+  adaptation::LedAdaptOptions adapt_options;
   restoration::DetectDatasetOptions options;
 };
 
@@ -47,7 +47,7 @@ int run(DetectArgs& a) {
   if (a.adapt) {
     if (a.adapt_iterations > 0) a.adapt_options.iterations = a.adapt_iterations;
     a.adapt_options.validate();
-    a.options.adapt = study::led_adaptation_hook(a.adapt_options);
+    a.options.adapt = adaptation::led_adaptation_hook(a.adapt_options);
   }
   const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
   double mean = 0;
@@ -111,7 +111,7 @@ Command make(CLI::App& root) {
                   "A fixed iteration count for --adapt's fine-tune instead of --adapt-passes (30 on a 14-view "
                   "dataset: ~3x sooner than the default 100, IoU ~0.005 lower on the validation scenes; "
                   "docs/record/led_adaptation.md, \"Fewer still\")")
-      ->check(CLI::Range(1, study::kMaxAdaptIterations))
+      ->check(CLI::Range(1, adaptation::kMaxAdaptIterations))
       ->excludes(passes)
       ->needs(adapt);
   sub->add_option("--adapt-layouts", a->adapt_options.layouts, "Drop layouts rendered over every training view by --adapt")

@@ -16,7 +16,7 @@ struct TrainFlags {
   std::vector<double> background;
 
   // Binds the numeric flags to `train` and `checkpoint_every`; the named choices go through apply().
-  void add_to(CLI::App* app, recon::TrainOptions& train, int& checkpoint_every) {
+  void add_to(CLI::App* app, reconstruction::TrainOptions& train, int& checkpoint_every) {
     app->add_option("--iterations", train.iterations, "3DGS training iterations")
         ->capture_default_str()->check(CLI::PositiveNumber);
     app->add_option("--seed", train.seed, "Random seed (view order, random initialization, the radiance field's too)")
@@ -56,12 +56,12 @@ struct TrainFlags {
   }
 
   // The named choices and the background, after parsing.
-  void apply(recon::TrainOptions& train) const {
-    train.random_init = random_init == "frustum" ? recon::TrainOptions::RandomInit::kFrustum
-                                                 : recon::TrainOptions::RandomInit::kPhotoConsistent;
+  void apply(reconstruction::TrainOptions& train) const {
+    train.random_init = random_init == "frustum" ? reconstruction::TrainOptions::RandomInit::kFrustum
+                                                 : reconstruction::TrainOptions::RandomInit::kPhotoConsistent;
     train.mask_normalization =
-        mask_normalization == "reference" ? recon::MaskNormalization::kReference : recon::MaskNormalization::kValid;
-    train.large_prune = recon::parse_large_prune(large_prune, "--large-prune");
+        mask_normalization == "reference" ? reconstruction::MaskNormalization::kReference : reconstruction::MaskNormalization::kValid;
+    train.large_prune = reconstruction::parse_large_prune(large_prune, "--large-prune");
     if (!background.empty()) {
       if (background.size() != 3) throw InputError("--background", "expected 3 values (R G B in [0, 1])");
       for (int c = 0; c < 3; ++c) train.background[c] = background[c];

@@ -22,7 +22,7 @@
 #include "core/image.h"
 #include "generator/lens/lens_render.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 namespace {
 
 Camera bench_camera(bool defocus, const std::string& name) {
@@ -173,16 +173,16 @@ void time_default(int views) {
 }
 
 }  // namespace
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens
 
 int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (std::strncmp(argv[i], "--time_default=", 15) == 0) {
-      weathergs::lens::time_default(std::atoi(argv[i] + 15));
+      weathergs::generator::lens::time_default(std::atoi(argv[i] + 15));
       return 0;
     }
     if (std::strncmp(argv[i], "--dump=", 7) == 0) {
-      weathergs::lens::dump(argv[i] + 7);
+      weathergs::generator::lens::dump(argv[i] + 7);
       return 0;
     }
   }

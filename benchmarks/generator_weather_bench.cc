@@ -22,7 +22,7 @@
 #include "generator/weather.h"
 #include "tests/generator/test_scene.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 namespace {
 
 struct Setting {
@@ -127,10 +127,11 @@ void BM_WaterRadianceGrid(benchmark::State& state) {
 }
 
 }  // namespace
-}  // namespace weathergs
+}  // namespace weathergs::generator
 
 int main(int argc, char** argv) {
   using namespace weathergs;
+  using namespace weathergs::generator;
   const std::vector<Setting> list = settings();
   for (const Setting& s : list) benchmark::RegisterBenchmark(("rain_600x400/" + s.name).c_str(), BM_Rain, s.options)
                                     ->Unit(benchmark::kMillisecond);

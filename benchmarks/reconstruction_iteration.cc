@@ -15,7 +15,7 @@
 #include "reconstruction/rasterizer.h"
 #include "reconstruction/trainer.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 Camera bench_camera(int width, int height) {
@@ -127,7 +127,7 @@ BENCHMARK(BM_Backward)->Apply(sizes);
 BENCHMARK(BM_Loss)->Args({300, 200, 0})->Args({600, 400, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction
 
 // WEATHERGS_THREADS caps the worker threads (0 or unset = all cores). With 1 thread the CPU column is
 // the single-thread cost even on a loaded machine. WEATHERGS_TILE_WIDTH = 4 | 8 picks the tile
@@ -136,12 +136,12 @@ int main(int argc, char** argv) {
   const char* t = std::getenv("WEATHERGS_THREADS");
   weathergs::set_num_threads(t ? std::atoi(t) : 0);
   if (const char* w = std::getenv("WEATHERGS_TILE_WIDTH")) {
-    if (!weathergs::recon::internal::set_tile_kernel_width(std::atoi(w))) {
+    if (!weathergs::reconstruction::internal::set_tile_kernel_width(std::atoi(w))) {
       std::fprintf(stderr, "WEATHERGS_TILE_WIDTH=%s: not 4 or 8, or not supported by this CPU\n", w);
       return 2;
     }
   }
-  std::printf("tile kernel width: %d lanes\n", weathergs::recon::internal::tile_kernel_width());
+  std::printf("tile kernel width: %d lanes\n", weathergs::reconstruction::internal::tile_kernel_width());
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

@@ -9,7 +9,7 @@
 #include "tests/reconstruction/test_scene.h"
 
 using namespace weathergs;
-using namespace weathergs::recon;
+using namespace weathergs::reconstruction;
 
 int main(int argc, char** argv) {
   if (argc < 2) {

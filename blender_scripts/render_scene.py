@@ -9,7 +9,7 @@
 #   out: <output_dir>/IMG/<view>.png         8-bit sRGB (view transform "Standard"); with
 #                                            render.float_images: IMG/<view>.exr, scene-linear float32
 #        <output_dir>/DEPTH/<view>.exr       planar camera z, float32, R=G=B, background 65504 (EEVEE)
-# Folder names and the clip range come from the job: datagen/blender.cc owns them.
+# Folder names and the clip range come from the job: capture/blender.cc owns them.
 #        <output_dir>/cameras.json           docs/formats.md cameras, recomputed from Blender's camera
 #        <output_dir>/render_log.json        timings and object counts
 #        <output_dir>/error.json             only on failure: {"where": "...", "what": "..."}

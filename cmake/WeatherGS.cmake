@@ -3,18 +3,21 @@
 # The parts in build order (a part comes after every part it needs), and the parts each one needs.
 # A part's libraries may link exactly the parts it needs (and core); anything else is a configure
 # error (docs/architecture.md).
-set(WEATHERGS_ALL_PARTS evaluator generator reconstruction restoration nerf datagen study)
+set(WEATHERGS_ALL_PARTS evaluator generator reconstruction restoration nerf capture adaptation methods)
 set(WEATHERGS_PART_NEEDS_evaluator "")
 set(WEATHERGS_PART_NEEDS_generator "")
 set(WEATHERGS_PART_NEEDS_reconstruction "")
 set(WEATHERGS_PART_NEEDS_restoration "")
 set(WEATHERGS_PART_NEEDS_nerf "")
-# datagen makes whole benchmark datasets (Blender, the generator, COLMAP): one layer above the generator.
-set(WEATHERGS_PART_NEEDS_datagen "generator")
-# study runs whole methods on datasets (train, render, evaluate; COLMAP points when a dataset has
-# none; new lens drops from the generator for the LED's adaptation): the top library layer, below
+# capture makes whole benchmark datasets (Blender, the generator, COLMAP): one layer above the generator.
+set(WEATHERGS_PART_NEEDS_capture "generator")
+# adaptation fine-tunes restoration's networks to a dataset on effects the generator renders (the
+# LED on new lens drops), so that restoration itself never depends on the generator.
+set(WEATHERGS_PART_NEEDS_adaptation "restoration;generator")
+# methods runs whole methods on datasets (train, render, evaluate; COLMAP points when a dataset has
+# none; the LED adapted to the dataset by adaptation/): the top library layer, below
 # apps only.
-set(WEATHERGS_PART_NEEDS_study "reconstruction;restoration;nerf;evaluator;datagen;generator")
+set(WEATHERGS_PART_NEEDS_methods "reconstruction;restoration;nerf;evaluator;capture;adaptation")
 
 set(WEATHERGS_ALLOWED_DEPS_core "")
 foreach(part IN LISTS WEATHERGS_ALL_PARTS)

@@ -1,6 +1,6 @@
 // The folder layout of a dataset (docs/formats.md), spelled once. Every part and
 // every script builds dataset paths from these names; blender_scripts/ receive theirs through the
-// job file that datagen writes.
+// job file that capture writes.
 #pragma once
 
 #include <string>

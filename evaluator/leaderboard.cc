@@ -84,7 +84,7 @@ std::string html_escape(const std::string& s) {
   return o;
 }
 
-// Upper bounds and ground-truth-assisted runs: shown, never ranked (study/method.h).
+// Upper bounds and ground-truth-assisted runs: shown, never ranked (methods/method.h).
 bool is_reference_method(const std::string& method) {
   return method == "oracle" || method == "gt-masks" || method == "nerf-oracle";
 }

@@ -16,7 +16,7 @@
 namespace weathergs::evaluator {
 
 // One method's cost, the mean over its runs (all variants and seeds) of the numbers its results
-// files record in method_info (study/reconstruct.cc); a number no run records is NaN (printed "–").
+// files record in method_info (methods/reconstruct.cc); a number no run records is NaN (printed "–").
 struct CostRow {
   std::string method;
   int runs = 0;

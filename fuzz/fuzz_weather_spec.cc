@@ -6,6 +6,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace weathergs;
+  using namespace weathergs::generator;
   const std::string path = fuzz::write_input(data, size, "weather.json");
   return fuzz::expect_only_input_errors([&] {
     const WeatherSpec spec = parse_weather_spec(JsonReader::from_file(path));

@@ -9,7 +9,7 @@
 #include "core/rng.h"
 #include "generator/stages.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 namespace {
 
@@ -186,4 +186,4 @@ void OverlayStage::run(WeatherView& v) const {
       std::llround(options_.count_per_mpx * options_.rate_scale * double(v.camera.width) * v.camera.height * 1e-6);
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

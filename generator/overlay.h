@@ -16,7 +16,7 @@
 #include "core/json_reader.h"
 #include "generator/particles.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 // Sizes are in pixels of a 600-pixel-wide image (the paper profile) and scale with the image width,
 // so every profile looks alike. Every default is written into dataset.json's resolved spec.
@@ -45,4 +45,4 @@ struct OverlayOptions {
 Image render_overlay_alpha(const OverlayOptions& options, uint64_t seed, const std::string& view_name, int width,
                            int height);
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 namespace {
 // Streams of the generator's Rng keys (core/rng.h): one per (species, class) and one per wind.
@@ -33,7 +33,7 @@ const char* to_string(Species s) { return s == Species::kRain ? "rain" : "snow";
 
 std::string ParticleId::to_string() const {
   std::ostringstream o;
-  o << weathergs::to_string(Species(species)) << "/" << size_class << "/" << cell.x() << ":" << cell.y()
+  o << generator::to_string(Species(species)) << "/" << size_class << "/" << cell.x() << ":" << cell.y()
     << ":" << cell.z() << "/" << index;
   return o.str();
 }
@@ -193,4 +193,4 @@ void ParticleField::states(const Particle& p, const double* t, int n, double t_r
   }
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

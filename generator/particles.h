@@ -19,7 +19,7 @@
 #include "generator/physics.h"
 #include "generator/wind.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 enum class Species { kRain = 0, kSnow = 1 };
 const char* to_string(Species s);
@@ -109,4 +109,4 @@ class ParticleField {
 // (inversion; normal approximation above lambda = 200).
 int poisson_from_uniform(double lambda, double u, double u2);
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

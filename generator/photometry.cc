@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 namespace {
 // The environment image a kernel samples: about 64 pixels across. A drop's rings span tens of degrees,
@@ -188,4 +188,4 @@ Eigen::Vector3f ParticleRadianceGrid::at(double x, double y) const {
   return (1 - fy) * ((1 - fx) * n(x0, y0) + fx * n(x1, y0)) + fy * ((1 - fx) * n(x0, y1) + fx * n(x1, y1));
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -20,7 +20,7 @@
 #include "core/camera.h"
 #include "core/image.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 // Relative refractive index of water to air at visible wavelengths (IAPWS, 589 nm, 20 C: 1.333).
 constexpr double kWaterRefractiveIndex = 1.333;
@@ -89,4 +89,4 @@ class ParticleRadianceGrid {
   std::vector<Eigen::Vector3f> nodes_;
 };
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

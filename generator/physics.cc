@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "generator/physics_constants.h"
 
-namespace weathergs::physics {
+namespace weathergs::generator::physics {
 
 double marshall_palmer_lambda_per_mm(double rate_mm_h) {
   WGS_CHECK_GT(rate_mm_h, 0.0);
@@ -128,4 +128,4 @@ double precipitation_rate_mm_h(const ExponentialSizeDistribution& dist,
   return kRainRateFactor * s * h / 3.0;
 }
 
-}  // namespace weathergs::physics
+}  // namespace weathergs::generator::physics

@@ -6,7 +6,7 @@
 #include <functional>
 #include <string>
 
-namespace weathergs::physics {
+namespace weathergs::generator::physics {
 
 // Marshall-Palmer raindrop size distribution: N(D) = 8000 exp(-Lambda D) m^-3 mm^-1.
 double marshall_palmer_lambda_per_mm(double rate_mm_h);  // 4.1 R^-0.21; rate_mm_h > 0
@@ -63,4 +63,4 @@ ExponentialSizeDistribution gunn_marshall(double rate_mm_h, double d_min_mm, dou
 double precipitation_rate_mm_h(const ExponentialSizeDistribution& dist,
                                const std::function<double(double)>& velocity_m_s, int steps = 4000);
 
-}  // namespace weathergs::physics
+}  // namespace weathergs::generator::physics

@@ -6,7 +6,7 @@
 
 #include "core/constants.h"
 
-namespace weathergs::physics {
+namespace weathergs::generator::physics {
 
 // Marshall & Palmer (1948), J. Meteor. 5:165, "The distribution of raindrops with size":
 // N(D) = N0 exp(-Lambda D), N0 = 0.08 cm^-4, Lambda = 41 R^-0.21 cm^-1.
@@ -75,4 +75,4 @@ constexpr double kRainClassBounds_mm_h[5] = {0.25, 2.5, 10.0, 50.0, 100.0};
 // geometric-mean rule: snow 0.5, 2.24, 10.0, 28.3 mm/h water equivalent.
 constexpr double kSnowClassBounds_mm_h[5] = {0.25, 1.0, 5.0, 20.0, 40.0};
 
-}  // namespace weathergs::physics
+}  // namespace weathergs::generator::physics

@@ -10,7 +10,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 const char* to_string(ParticleShading shading) {
   return shading == ParticleShading::kOptics ? "optics" : "weighted";
@@ -443,4 +443,4 @@ void composite_particles(const ParticleRaster& raster, Image* radiance) {
   }
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -25,7 +25,7 @@
 #include "core/image.h"
 #include "generator/photometry.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 enum class StreakMode { kAnalytic, kTimeSamples };
 const char* to_string(StreakMode mode);  // "analytic", "time_samples" (the spec's spelling)
@@ -141,4 +141,4 @@ ParticleRaster rasterize_splats(const RenderView& view, const SplatList& splats,
 // radiance = (1 - A) radiance + A L_particles, in place (linear RGB).
 void composite_particles(const ParticleRaster& raster, Image* radiance);
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -9,7 +9,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 namespace {
 // Work items of the particle stage are (class, cell) pairs, processed in fixed chunks.
@@ -273,4 +273,4 @@ void ParticleStage::run(WeatherView& v) const {
   }
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -17,7 +17,7 @@
 #include "generator/render.h"
 #include "generator/weather_spec.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 // One view passing through the stages.
 struct WeatherView {
@@ -121,4 +121,4 @@ double population_distance_m(const ParticleField& field, int k, const RenderView
 // The manifest's CSV header (one row per drawn particle).
 extern const char* const kManifestHeader;
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -19,7 +19,7 @@
 
 #include "generator/weather_spec.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 namespace fs = std::filesystem;
 
@@ -246,7 +246,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
     layers.insert(layer_names[i].begin(), layer_names[i].end());
     texts.insert(text_names[i].begin(), text_names[i].end());
   }
-  // One straight line: the stages before this one (e.g. datagen's Blender render) keep their entries;
+  // One straight line: the stages before this one (e.g. capture's Blender render) keep their entries;
   // the weather adds its own keys and appends its stages. Re-weathering a weathered dataset replaces
   // the weather's keys only.
   Json block = clean.info.generator && clean.info.generator->is_object() ? *clean.info.generator : Json::object();
@@ -276,4 +276,4 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
   return block;
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

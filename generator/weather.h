@@ -31,7 +31,7 @@
 #include "core/json_reader.h"
 #include "generator/weather_spec.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 struct WeatherRunOptions {
   std::optional<uint64_t> seed;          // overrides the spec's seed (e.g. one seed per scene variant)
@@ -44,14 +44,14 @@ struct WeatherRunOptions {
   bool write_targets = false;            // targets/no_particles and targets/lens_only (docs/generator.md)
   std::optional<WeatherStyle> style;     // overrides the spec's "style" (physical ignores paper blocks)
   bool copy_exports = true;              // copy the input's sparse/ and transforms.json (false when the
-                                         // caller writes its own, as datagen's generate does)
+                                         // caller writes its own, as capture's generate does)
 
   void validate() const;  // InputError naming the field
 };
 
 // Reads the clean dataset, applies the spec, writes a complete dataset at out_dir atomically
 // (AtomicDirectory), returns the "generator" block written to dataset.json: the input dataset's
-// block (entries of earlier stages, e.g. datagen's render) plus the weather's own entries
+// block (entries of earlier stages, e.g. capture's render) plus the weather's own entries
 //   {"version", "seed", "spec" (resolved, every default filled in), "stages": [... earlier stages,
 //    {"name", "seconds"} per weather stage], "sky_radiance": [r, g, b], "counters": {...}, "outputs": {...}}.
 // The spec may be part of a larger document: errors name spec.file() and spec.pointer().
@@ -64,4 +64,4 @@ std::array<double, 3> estimate_sky_radiance(const Image& clean_linear);
 // The dataset-wide sky radiance: the mean of the views' estimates, summed in the given order.
 Eigen::Vector3f mean_sky_radiance(const std::vector<std::array<double, 3>>& per_view);
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

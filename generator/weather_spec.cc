@@ -8,7 +8,7 @@
 #include "generator/physics.h"
 #include "generator/physics_constants.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 namespace {
 
@@ -417,4 +417,4 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
   return spec;
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -15,7 +15,7 @@
 #include "generator/particles.h"
 #include "generator/render.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 // The spec's "camera" block: where given, overrides every view's value.
 struct CameraOverrides {
@@ -89,4 +89,4 @@ struct WeatherSpec {
 // "paper" blocks (that is what the override is for: the same scene variants in both styles).
 WeatherSpec parse_weather_spec(const JsonReader& spec, std::optional<WeatherStyle> style_override = std::nullopt);
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -6,7 +6,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 
 namespace {
 
@@ -101,4 +101,4 @@ void WindField::particle_response(const Eigen::Vector3d& x_ref, double fall, dou
   }
 }
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-namespace weathergs {
+namespace weathergs::generator {
 
 struct WindOptions {
   Eigen::Vector3d mean_m_s = Eigen::Vector3d::Zero();  // world frame (+z up)
@@ -59,4 +59,4 @@ class WindField {
   double max_gust_ = 0;
 };
 
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -21,7 +21,7 @@ namespace {
 constexpr int kRunVersion = 1;
 constexpr const char* kFieldFile = "field.bin";
 constexpr const char* kRunJson = "run.json";
-constexpr double kMinNearM = 0.05;      // the generator's own near clip (datagen: Cycles clip_start)
+constexpr double kMinNearM = 0.05;      // the generator's own near clip (capture: Cycles clip_start)
 constexpr double kDefaultNearM = 1.0;   // without SfM points
 
 Json nullable(const std::string& s) { return s.empty() ? Json(nullptr) : Json(s); }

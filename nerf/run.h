@@ -1,5 +1,5 @@
 // Whole radiance-field runs on a dataset, with the same contract as the 3DGS runs
-// (reconstruction/run.h), so the study and the leaderboard treat every method alike.
+// (reconstruction/run.h), so methods/ and the leaderboard treat every method alike.
 //
 // A run folder holds:
 //   run.json     {"format": "weathergs-nerf-run", "version": 1, "complete": bool, "dataset", the

@@ -6,7 +6,7 @@
 #include "core/error.h"
 #include "reconstruction/cpu_clones.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 namespace {
 
@@ -79,4 +79,4 @@ int64_t first_non_finite(const float* a, int64_t n) {
   return -1;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

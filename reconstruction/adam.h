@@ -6,7 +6,7 @@
 
 #include <cstdint>
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 // One parameter group's Adam rates at this step: p -= step_size m / (sqrt(v) / bc2_sqrt + eps),
 // with step_size = lr / (1 - beta1^t) and bc2_sqrt = sqrt(1 - beta2^t) (the reference's torch.optim.Adam).
@@ -32,4 +32,4 @@ bool adam_update_rows(float* p, const float* grad, float* m, float* v, int64_t r
 // Index of the first non-finite element of a[0, n), or -1.
 int64_t first_non_finite(const float* a, int64_t n);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

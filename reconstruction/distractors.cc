@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 constexpr uint64_t kStreamDistractors = 0x6469737472ull;  // "distr": placement of view v's distractors
@@ -97,4 +97,4 @@ GaussianSet<float> scene_rows(const GaussianSet<float>& g, const std::vector<int
   return out;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

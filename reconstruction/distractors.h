@@ -18,7 +18,7 @@
 #include "core/camera.h"
 #include "reconstruction/gaussians.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 // owner[i] of a Gaussian: kSceneOwner for the scene, else the index of the training view it belongs to.
 constexpr int32_t kSceneOwner = -1;
@@ -48,4 +48,4 @@ void scatter_rows(const GaussianSet<float>& sub, const std::vector<int64_t>& row
 // The scene alone (owner == kSceneOwner), in order: what is exported and rendered at test time.
 GaussianSet<float> scene_rows(const GaussianSet<float>& g, const std::vector<int32_t>& owner);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <cstring>
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 template <typename T> using Vec2 = Eigen::Matrix<T, 2, 1>;
 template <typename T> using Vec3 = Eigen::Matrix<T, 3, 1>;
@@ -390,4 +390,4 @@ inline void sh_to_color_vjp(int degree, const T* sh, const Vec3<T>& p_world, con
   *v_p_world += (v_dir - dir * dir.dot(v_dir)) / len;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -11,7 +11,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 template <typename T>
 void GaussianSet<T>::resize(size_t n) {
@@ -309,4 +309,4 @@ GaussianSet<float> init_from_points(const std::vector<Eigen::Vector3d>& points_w
   return g;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -10,7 +10,7 @@
 
 #include "reconstruction/gaussian_math.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 // Parameters in the optimizer's (pre-activation) space, as in the reference GaussianModel:
 // scale = exp(log_scale), rotation = normalize(quaternion), opacity = sigmoid(opacity_logit).
@@ -68,4 +68,4 @@ GaussianSet<float> init_from_points(const std::vector<Eigen::Vector3d>& points_w
 // Mean squared distance of each point to its 3 nearest other points (distCUDA2); exact, via a k-d tree.
 std::vector<double> mean_sq_dist_3nn(const std::vector<Eigen::Vector3d>& points);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -5,7 +5,7 @@
 
 #include "core/error.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 namespace {
 
@@ -180,4 +180,4 @@ void InTheWild::restore(const std::vector<float>& s) {
   }
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -18,7 +18,7 @@
 
 #include "core/train_views.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 struct InTheWildOptions {
   int from = 200;                  // iterations before the visibility map is used
@@ -76,4 +76,4 @@ class InTheWild {
   std::vector<float> mask_, grad_affine_, grad_logits_;  // scratch and the last backward's gradients
 };
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

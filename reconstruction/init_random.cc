@@ -10,7 +10,7 @@
 #include "core/parallel.h"
 #include "core/rng.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 namespace {
 
@@ -167,4 +167,4 @@ GaussianSet<float> init_random(const std::vector<TrainView>& views, const TrainO
   return init_from_points(points, colors);
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

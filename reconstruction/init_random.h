@@ -22,7 +22,7 @@
 #include "reconstruction/gaussians.h"
 #include "reconstruction/trainer.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 constexpr int kPlaneSweepDepths = 48;  // S: depths per ray, stratified in inverse depth
 constexpr int kPlaneSweepNeighbors = 4;  // K: nearest train views compared
@@ -36,4 +36,4 @@ void sample_random_points(const std::vector<TrainView>& views, const TrainOption
 // Gaussians at those points (init_from_points).
 GaussianSet<float> init_random(const std::vector<TrainView>& views, const TrainOptions& options);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -7,7 +7,7 @@
 #include "core/parallel.h"
 #include "reconstruction/cpu_clones.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 std::vector<double> ssim_window_1d() {
   std::vector<double> w(kSsimWindow);
@@ -195,4 +195,4 @@ template LossValue<double> photometric_loss<double>(const std::vector<double>&, 
 template float ssim_mean<float>(const std::vector<float>&, const std::vector<float>&, int, int);
 template double ssim_mean<double>(const std::vector<double>&, const std::vector<double>&, int, int);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -20,7 +20,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 constexpr double kLambdaDssim = 0.2;  // reference lambda_dssim
 constexpr int kSsimWindow = 11;
@@ -59,4 +59,4 @@ T ssim_mean(const std::vector<T>& a, const std::vector<T>& b, int width, int hei
 // PSNR in dB of a mean squared error of [0, 1] values; capped at 100 dB for a perfect match.
 double psnr_from_mse(double mse);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

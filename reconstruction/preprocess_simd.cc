@@ -18,7 +18,7 @@
 #include "reconstruction/raster_internal.h"
 #include "reconstruction/simd_lanes.h"
 
-namespace weathergs::recon::internal {
+namespace weathergs::reconstruction::internal {
 
 namespace {
 
@@ -407,4 +407,4 @@ void preprocess_simd(const GaussianSet<float>& g, const RasterCamera<float>& cam
   });
 }
 
-}  // namespace weathergs::recon::internal
+}  // namespace weathergs::reconstruction::internal

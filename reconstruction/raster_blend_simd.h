@@ -14,7 +14,7 @@
 #include "reconstruction/raster_internal.h"
 #include "reconstruction/simd_lanes.h"
 
-namespace weathergs::recon::internal {
+namespace weathergs::reconstruction::internal {
 namespace {  // NOLINT(google-build-namespaces): per-translation-unit copies, see above
 
 template <typename V>
@@ -186,4 +186,4 @@ WGS_ALWAYS_INLINE void render_tile(const RasterSettings<float>& settings, Raster
 }
 
 }  // namespace
-}  // namespace weathergs::recon::internal
+}  // namespace weathergs::reconstruction::internal

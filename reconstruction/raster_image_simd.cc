@@ -10,7 +10,7 @@
 #include "reconstruction/raster_blend_simd.h"
 #include "reconstruction/raster_internal.h"
 
-namespace weathergs::recon::internal {
+namespace weathergs::reconstruction::internal {
 
 #if defined(__x86_64__) && defined(__GNUC__)
 __attribute__((target("avx2,fma"))) void render_image_tile_fused(const RasterSettings<float>& settings,
@@ -25,4 +25,4 @@ void render_image_tile_fused(const RasterSettings<float>& settings, RasterState<
 }
 #endif
 
-}  // namespace weathergs::recon::internal
+}  // namespace weathergs::reconstruction::internal

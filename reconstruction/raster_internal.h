@@ -12,7 +12,7 @@
 
 #include "reconstruction/rasterizer.h"
 
-namespace weathergs::recon::internal {
+namespace weathergs::reconstruction::internal {
 
 constexpr int64_t kGaussianChunk = 2048;  // per-Gaussian loops: work per parallel task
 constexpr int kEntryGrads = 9;
@@ -311,4 +311,4 @@ bool set_tile_kernel_width(int width);
 bool fused_image_kernel();
 void render_image_tile_fused(const RasterSettings<float>& settings, RasterState<float>* s, int64_t tile);
 
-}  // namespace weathergs::recon::internal
+}  // namespace weathergs::reconstruction::internal

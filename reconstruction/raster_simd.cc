@@ -19,7 +19,7 @@
 #include "reconstruction/raster_internal.h"
 #include "reconstruction/simd_lanes.h"
 
-namespace weathergs::recon::internal {
+namespace weathergs::reconstruction::internal {
 
 namespace {
 
@@ -250,4 +250,4 @@ void backward_tile_simd(const RasterSettings<float>& settings, RasterState<float
   }
 }
 
-}  // namespace weathergs::recon::internal
+}  // namespace weathergs::reconstruction::internal

@@ -10,7 +10,7 @@
 #include "core/parallel.h"
 #include "reconstruction/raster_internal.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 namespace {
 
@@ -517,4 +517,4 @@ template void rasterize_backward<double>(const GaussianSet<double>&, const Raste
                                          const RasterSettings<double>&, RasterState<double>*,
                                          const std::vector<double>&, GaussianSet<double>*, std::vector<double>*);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

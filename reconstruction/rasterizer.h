@@ -19,7 +19,7 @@
 #include "reconstruction/gaussian_math.h"
 #include "reconstruction/gaussians.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 // What a forward pass leaves in the RasterState.
 enum class RasterOutputs {
@@ -102,4 +102,4 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& camera, 
                         RasterState<T>* state, const std::vector<T>& v_image, GaussianSet<T>* grad,
                         std::vector<T>* v_mean2d_ndc = nullptr);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

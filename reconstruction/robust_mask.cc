@@ -6,7 +6,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 namespace {
 constexpr uint64_t kStreamRobust = 0x726f62757374ull;  // "robust": the warm-up's Bernoulli draws
@@ -89,4 +89,4 @@ void RobustMask::restore(std::vector<double> histogram, double threshold) {
   threshold_ = threshold;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -20,7 +20,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 struct RobustMaskOptions {
   double percentile = 0.7;        // robust_percentile
@@ -60,4 +60,4 @@ class RobustMask {
   double threshold_ = 1.0;
 };
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -16,7 +16,7 @@
 #include "core/progress.h"
 #include "reconstruction/init_random.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 namespace fs = std::filesystem;
 
@@ -335,4 +335,4 @@ RenderRunResult render_run(const RenderRunOptions& o) {
   return result;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -24,7 +24,7 @@
 #include "core/train_views.h"
 #include "reconstruction/trainer.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 // The training inputs (which images, masks and points) and the loaded views have their home in
 // core/train_views.h: the NeRF backend (nerf/) reads the same ones.
@@ -107,4 +107,4 @@ struct RenderRunResult {
 };
 RenderRunResult render_run(const RenderRunOptions& options);
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

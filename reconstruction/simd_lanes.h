@@ -9,7 +9,7 @@
 #pragma GCC diagnostic ignored "-Wpsabi"
 #define WGS_ALWAYS_INLINE inline __attribute__((always_inline))
 
-namespace weathergs::recon::internal {
+namespace weathergs::reconstruction::internal {
 
 template <int W>
 struct Lanes {
@@ -17,4 +17,4 @@ struct Lanes {
   typedef int32_t i __attribute__((vector_size(4 * W)));
 };
 
-}  // namespace weathergs::recon::internal
+}  // namespace weathergs::reconstruction::internal

@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "reconstruction/trainer.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 void TrainOptions::validate(const std::string& where) const {
   auto fail = [&](const std::string& field, const std::string& value, const std::string& rule) {
@@ -216,4 +216,4 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   return o;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

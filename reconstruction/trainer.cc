@@ -12,7 +12,7 @@
 #include "reconstruction/adam.h"
 #include "reconstruction/distractors.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 namespace {
 
@@ -425,4 +425,4 @@ GaussianSet<float> Trainer::scene_gaussians() const {
   return num_distractors_ > 0 ? scene_rows(g_, owner_) : g_;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

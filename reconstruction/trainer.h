@@ -19,7 +19,7 @@
 #include "reconstruction/rasterizer.h"
 #include "reconstruction/robust_mask.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 // Reference defaults (arguments/__init__.py OptimizationParams); iteration counts are 1-based as in
 // train.py. validate() throws InputError naming the field, its value and the rule.
@@ -211,4 +211,4 @@ class Trainer {
 
 using weathergs::peak_rss_mb;  // core/progress.h
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

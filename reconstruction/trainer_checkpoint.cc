@@ -7,7 +7,7 @@
 #include "reconstruction/distractors.h"
 #include "reconstruction/trainer.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 
 // ---------------------------------------------------------------------------------------------
 // Checkpoints: "WGSCKPT3", uint64 JSON length, JSON header, then the float arrays in a fixed order,
@@ -161,4 +161,4 @@ double Trainer::load_checkpoint(const std::string& path) {
   return seconds;
 }
 
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -61,7 +61,7 @@ struct LedScore {
 };
 LedScore score_lens_masks(const std::string& name, const std::vector<Image>& predicted, const std::vector<Image>& truth);
 
-// Test-time adaptation of the network to the dataset before it runs (study/led_adaptation.h supplies
+// Test-time adaptation of the network to the dataset before it runs (adaptation/led_adaptation.h supplies
 // one: restoration cannot render drops). Gets the loaded network, the dataset and its training views
 // as read (names and images, dataset order); returns the network to run and fills `report`, which
 // detect.json stores as "adaptation".
@@ -102,7 +102,7 @@ struct DetectDatasetReport {
 // The keys of detect.json that decide its masks, apart from the adaptation (whose report the adapt
 // hook writes): the weights' sha256, the images, the averaging and the post-processing `resolved`
 // (LedMaskOptions::resolved). detect_dataset writes them; a run that resumes compares them with
-// settings_mismatch (core/json_reader.h) instead of detecting again (study/reconstruct).
+// settings_mismatch (core/json_reader.h) instead of detecting again (methods/reconstruct).
 Json detect_settings_json(const std::string& weights_sha256, const DetectDatasetOptions& options,
                           const LedMaskOptions& resolved);
 

@@ -75,7 +75,7 @@ inline constexpr double kMaxDropWeight = 4.0;
 //   threads (the shipped weights' recipe; the weights depend on the thread count in their last bits).
 // kPerExample: each example's share of the batch loss is differentiated on its own with one intra-op
 //   thread, `threads` examples at a time, and the shares' gradients are summed in batch order: the
-//   same weights whatever the thread count (the test-time adaptation, study/led_adaptation). Not for
+//   same weights whatever the thread count (the test-time adaptation, adaptation/led_adaptation). Not for
 //   view-pooling networks, whose examples are one forward pass.
 enum class LedGradient { kBatched, kPerExample };
 const char* to_string(LedGradient g);  // "batched", "per-example"

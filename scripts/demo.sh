@@ -2,7 +2,7 @@
 # The demo behind `make demo`: the benchmark's main job, small. Generates the quick profile of pool in
 # snow and in rain (Blender + the weather generator + COLMAP), reconstructs each with vanilla 3DGS,
 # WeatherGS and the oracle (3DGS on the clean images) through the Snakemake workflow, scores every
-# run against the clean ground truth and prints the paper's tables (docs/study.md).
+# run against the clean ground truth and prints the paper's tables (docs/methods.md).
 # Usage: scripts/demo.sh [WEATHERGS_BINARY] [OUT]; DEMO_ITERATIONS overrides the iterations.
 set -euo pipefail
 WGS=$(realpath "${1:-build/apps/weathergs}")

@@ -8,7 +8,7 @@
 #include "core/constants.h"
 #include "core/error.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 namespace {
 
@@ -570,4 +570,4 @@ PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o0, const E
   return res;
 }
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

@@ -22,7 +22,7 @@
 #include "generator/lens/lens_spec.h"
 #include "generator/lens/optics.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 // An Embree device whose errors become exceptions: the error callback records the message and every
 // wrapper call ends with throw_if_error(), which throws InternalError naming the failed step.
@@ -152,4 +152,4 @@ struct TraceOptions {
 PathResult trace_path(const DropScene& scene, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                       const TraceOptions& options, std::vector<PathEvent>* events = nullptr);
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

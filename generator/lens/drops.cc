@@ -8,7 +8,7 @@
 #include "core/error.h"
 #include "core/rng.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 namespace {
 
@@ -195,4 +195,4 @@ std::vector<PlacedDrop> place_drops(const DropField& field, const Camera& camera
   return out;
 }
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

@@ -17,7 +17,7 @@
 #include "core/json_reader.h"
 #include "generator/lens/lens_spec.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 // Contact angles are clamped to [kMinContactAngleRad, pi - kMinContactAngleRad]: below 0.057
 // degrees a 3 mm drop is flatter than 1.5 um, optically a film, and its sphere radius (a / sin)
@@ -95,4 +95,4 @@ std::vector<PlacedDrop> place_drops(const DropField& field, const Camera& camera
 PlacedDrop make_placed_drop(int id, const Eigen::Vector3d& base_center, const Eigen::Vector3d& water_normal,
                             double outline_radius, double contact_angle_rad);
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

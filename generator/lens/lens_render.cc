@@ -11,7 +11,7 @@
 #include "core/parallel.h"
 #include "core/rng.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 namespace {
 
@@ -360,4 +360,4 @@ LensViewResult LensDropletRenderer::render(const Image& image, const Camera& cam
   return res;
 }
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

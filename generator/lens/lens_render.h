@@ -23,7 +23,7 @@
 #include "generator/lens/drops.h"
 #include "generator/lens/lens_spec.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 struct LensViewResult {
   Image image;     // composited linear RGB, the input's size
@@ -76,4 +76,4 @@ class LensDropletRenderer {
 // Stable 64-bit FNV-1a hash (view names key the per-pixel random streams).
 uint64_t fnv1a64(const std::string& s);
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <sstream>
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 const char* to_string(Attach a) { return a == Attach::kLens ? "lens" : "window"; }
 const char* to_string(DropSide s) { return s == DropSide::kScene ? "scene" : "camera"; }
@@ -211,4 +211,4 @@ Json lens_droplet_spec_to_json(const LensDropletSpec& s) {
   return j;
 }
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

@@ -11,7 +11,7 @@
 #include "core/json_reader.h"
 #include "generator/lens/optics.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 enum class Attach { kLens, kWindow };
 // Which side of the glass the water sits on. kScene: the side away from the camera (rain on a lens
@@ -83,4 +83,4 @@ void validate_lens_droplet_spec(const LensDropletSpec& spec, const std::string& 
 // gives the same spec.
 Json lens_droplet_spec_to_json(const LensDropletSpec& spec);
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

@@ -2,7 +2,7 @@
 
 #include "core/dataset_layout.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 void LensDropletStage::run(WeatherView& view) const {
   LensViewResult r = renderer_.render(view.radiance, view.camera, view.camera.time_s, &view.environment.sky);
@@ -15,4 +15,4 @@ void LensDropletStage::run(WeatherView& view) const {
   view.counters["lens_embree_rays"] += r.embree_rays;
 }
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

@@ -14,7 +14,7 @@
 #include "generator/lens/lens_render.h"
 #include "generator/stages.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 class LensDropletStage : public WeatherStage {
  public:
@@ -30,4 +30,4 @@ class LensDropletStage : public WeatherStage {
   LensDropletRenderer renderer_;
 };
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 Eigen::Vector3d reflect(const Eigen::Vector3d& d, const Eigen::Vector3d& n) {
   return d - 2.0 * d.dot(n) * n;
@@ -30,4 +30,4 @@ double fresnel_dielectric(double cos_i, double eta_i, double eta_t) {
   return std::clamp(0.5 * (rs * rs + rp * rp), 0.0, 1.0);
 }
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

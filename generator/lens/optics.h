@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <optional>
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 
 // Water at 20 C for visible light (Hale & Querry 1973: 1.333 at 589 nm).
 constexpr double kWaterRefractiveIndex = 1.333;
@@ -25,4 +25,4 @@ std::optional<Eigen::Vector3d> refract(const Eigen::Vector3d& d, const Eigen::Ve
 // total internal reflection.
 double fresnel_dielectric(double cos_i, double eta_i, double eta_t);
 
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

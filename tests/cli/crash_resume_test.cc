@@ -17,7 +17,7 @@
 #include "core/atomic_file.h"
 #include "core/dataset.h"
 #include "core/rng.h"
-#include "datagen/process.h"
+#include "capture/process.h"
 #include "tests/core/test_util.h"
 #include "tests/generator/test_scene.h"
 
@@ -146,7 +146,7 @@ TEST(CrashResume, WeatherKilledAnywhereLeavesNothingOrTheOldOutput) {
 }
 
 TEST(CrashResume, GenerateKilledAnywhereLeavesNothing) {
-  if (datagen::find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
+  if (capture::find_executable("blender").empty()) GTEST_SKIP() << "blender not installed";
   testing::TempDir tmp;
   const std::string scene = std::string(WEATHERGS_SOURCE_DIR) + "/scenes/pool.json";
   const std::string base = "generate --scene " + scene + " --weather rain --profile tiny --no-colmap --max-views 2 --cache " +

@@ -58,7 +58,7 @@ TEST(DatasetLayoutTest, BackgroundDepthHasOneDefinition) {
   EXPECT_TRUE(is_background_depth(std::numeric_limits<float>::infinity()));
   EXPECT_TRUE(is_background_depth(1e9f));
   EXPECT_TRUE(is_background_depth(3e9f));
-  EXPECT_FALSE(is_background_depth(65504.f));  // EEVEE's raw background is converted by datagen
+  EXPECT_FALSE(is_background_depth(65504.f));  // EEVEE's raw background is converted by capture
   EXPECT_FALSE(is_background_depth(999.f));
   EXPECT_FALSE(is_background_depth(0.f));
 }

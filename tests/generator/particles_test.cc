@@ -9,7 +9,7 @@
 #include "generator/particles.h"
 #include "generator/stages.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 namespace {
 
 SpeciesOptions rain_options(double rate, Eigen::Vector3d wind = {2, 0, 0}, double rms = 1.0) {
@@ -209,9 +209,9 @@ TEST(Poisson, InversionMatchesMeanAndVariance) {
 }
 
 }  // namespace
-}  // namespace weathergs
+}  // namespace weathergs::generator
 
-namespace weathergs {
+namespace weathergs::generator {
 namespace {
 
 TEST(PopulatedVolume, FollowsWhatTheCameraSeesNotWhereItIs) {
@@ -244,4 +244,4 @@ TEST(PopulatedVolume, FollowsWhatTheCameraSeesNotWhereItIs) {
 }
 
 }  // namespace
-}  // namespace weathergs
+}  // namespace weathergs::generator

@@ -9,7 +9,7 @@
 #include "generator/photometry.h"
 #include "generator/weather_spec.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 namespace {
 
 constexpr double kDeg = kPi / 180;
@@ -302,4 +302,4 @@ TEST(Photometry, LensDropCameraRadianceDefaultsByStyleAndAttach) {
 }
 
 }  // namespace
-}  // namespace weathergs
+}  // namespace weathergs::generator

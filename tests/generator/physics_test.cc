@@ -9,7 +9,7 @@
 #include "generator/physics.h"
 #include "generator/physics_constants.h"
 
-namespace weathergs::physics {
+namespace weathergs::generator::physics {
 namespace {
 
 // Unit conversions are exact up to double rounding.
@@ -151,4 +151,4 @@ TEST(SizeDistribution, InverseCdfSamplerPassesKolmogorovSmirnov) {
 }
 
 }  // namespace
-}  // namespace weathergs::physics
+}  // namespace weathergs::generator::physics

@@ -9,7 +9,7 @@
 
 #include "generator/render.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
@@ -237,4 +237,4 @@ TEST(Render, RenderOptionsValidation) {
 }
 
 }  // namespace
-}  // namespace weathergs
+}  // namespace weathergs::generator

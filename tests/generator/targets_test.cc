@@ -13,7 +13,7 @@
 #include "tests/core/test_util.h"
 #include "tests/generator/test_scene.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 namespace {
 
 namespace fs = std::filesystem;
@@ -203,4 +203,4 @@ TEST(Targets, WithLensDropsTheTargetsKeepTheSameDrops) {
 }
 
 }  // namespace
-}  // namespace weathergs
+}  // namespace weathergs::generator

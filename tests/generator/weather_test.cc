@@ -16,7 +16,7 @@
 #include "tests/core/test_util.h"
 #include "tests/generator/test_scene.h"
 
-namespace weathergs {
+namespace weathergs::generator {
 namespace {
 
 namespace fs = std::filesystem;
@@ -331,4 +331,4 @@ TEST(Weather, CommandLine) {
 }
 
 }  // namespace
-}  // namespace weathergs
+}  // namespace weathergs::generator

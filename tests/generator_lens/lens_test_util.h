@@ -11,7 +11,7 @@
 #include "generator/lens/drop_scene.h"
 #include "generator/lens/drops.h"
 
-namespace weathergs::lens::testing {
+namespace weathergs::generator::lens::testing {
 
 inline Camera test_camera(int w = 160, int h = 120, double f = 140, const std::string& name = "000") {
   Camera c;
@@ -53,4 +53,4 @@ inline PlacedDrop test_drop(int id, const GlassPlane& plane, double x_m, double 
                           contact_deg * kDeg);
 }
 
-}  // namespace weathergs::lens::testing
+}  // namespace weathergs::generator::lens::testing

@@ -10,7 +10,7 @@
 #include "generator/lens/optics.h"
 #include "tests/generator_lens/lens_test_util.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 namespace {
 
 using testing::kDeg;
@@ -385,4 +385,4 @@ TEST(LensEmbreeTest, DeviceErrorsBecomeExceptions) {
 }
 
 }  // namespace
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

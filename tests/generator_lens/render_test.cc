@@ -10,7 +10,7 @@
 #include "generator/lens/lens_render.h"
 #include "tests/generator_lens/lens_test_util.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 namespace {
 
 using testing::test_camera;
@@ -357,9 +357,9 @@ TEST(LensRenderTest, RejectsBadInputs) {
 }
 
 }  // namespace
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 namespace {
 
 TEST(LensDiskBlurTest, ReducedResolutionMatchesTheFullDisk) {
@@ -390,4 +390,4 @@ TEST(LensDiskBlurTest, ReducedResolutionMatchesTheFullDisk) {
 }
 
 }  // namespace
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

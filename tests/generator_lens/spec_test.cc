@@ -9,7 +9,7 @@
 #include "generator/lens/lens_spec.h"
 #include "tests/generator_lens/lens_test_util.h"
 
-namespace weathergs::lens {
+namespace weathergs::generator::lens {
 namespace {
 
 LensDropletSpec parse(const std::string& text) {
@@ -148,4 +148,4 @@ TEST(LensSpecTest, GeometryOfACap) {
 }
 
 }  // namespace
-}  // namespace weathergs::lens
+}  // namespace weathergs::generator::lens

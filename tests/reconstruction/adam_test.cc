@@ -10,7 +10,7 @@
 #include "core/rng.h"
 #include "reconstruction/adam.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 struct Arrays {
@@ -114,4 +114,4 @@ TEST(AdamTest, FirstNonFiniteFindsTheFirstBadElement) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -10,7 +10,7 @@
 #include "tests/core/test_util.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 namespace fs = std::filesystem;
@@ -125,4 +125,4 @@ TEST(CliTest, MaskAndImageFolders) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

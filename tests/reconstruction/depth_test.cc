@@ -7,7 +7,7 @@
 #include "reconstruction/run.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 // An opaque wall of small isotropic Gaussians on the plane x = wall_x, facing a camera on the -x side.
@@ -62,4 +62,4 @@ TEST(RenderDepth, PlanarDepthOfAWallAndBackgroundOutside) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

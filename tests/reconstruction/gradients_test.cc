@@ -9,7 +9,7 @@
 #include "reconstruction/rasterizer.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 using testing::look_at_camera;
@@ -254,4 +254,4 @@ TEST(GradientTest, MaskedL1SsimLoss) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

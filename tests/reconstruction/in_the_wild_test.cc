@@ -9,7 +9,7 @@
 #include "reconstruction/in_the_wild.h"
 #include "reconstruction/loss.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 constexpr int kW = 20, kH = 14;
@@ -114,4 +114,4 @@ TEST(InTheWildTest, IdentityBeforeTheWarmUpAndCheckpointState) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -10,7 +10,7 @@
 #include "reconstruction/loss.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 using testing::look_at_camera;
@@ -186,4 +186,4 @@ TEST(RandomInitTest, TrainingFromThePhotoConsistentCloudReachesASensiblePsnr) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

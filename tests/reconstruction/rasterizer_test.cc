@@ -14,7 +14,7 @@
 #include "reconstruction/rasterizer.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 using testing::look_at_camera;
@@ -602,4 +602,4 @@ TEST(RasterizerTest, SimdPreprocessEqualsScalar) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -6,7 +6,7 @@
 
 #include "reconstruction/robust_mask.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 // An H x W x 3 pair whose per-pixel error (mean over channels) is `err[i]`.
@@ -93,4 +93,4 @@ TEST(RobustMaskTest, NeighbourhoodRuleAndWarmUp) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

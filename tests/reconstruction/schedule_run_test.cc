@@ -11,7 +11,7 @@
 #include "tests/core/test_util.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 // A short run through train_run/render_run: with the scaled schedule the final model renders the
@@ -55,4 +55,4 @@ TEST(Schedule, ShortRunDoesNotEndOnAReset) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

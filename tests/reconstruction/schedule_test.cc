@@ -10,7 +10,7 @@
 #include "tests/core/test_util.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
@@ -61,4 +61,4 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

@@ -16,7 +16,7 @@
 #include "reconstruction/gaussians.h"
 #include "reconstruction/rasterizer.h"
 
-namespace weathergs::recon::testing {
+namespace weathergs::reconstruction::testing {
 
 // A camera at `eye` looking at `target` with world +z up (OpenCV axes: x right, y down, z forward).
 inline Camera look_at_camera(const std::string& name, int width, int height, double focal,
@@ -135,4 +135,4 @@ inline Dataset write_synthetic_dataset(const std::string& root, const GaussianSe
   return d;
 }
 
-}  // namespace weathergs::recon::testing
+}  // namespace weathergs::reconstruction::testing

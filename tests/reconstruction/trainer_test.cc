@@ -11,7 +11,7 @@
 #include "reconstruction/trainer.h"
 #include "tests/reconstruction/test_scene.h"
 
-namespace weathergs::recon {
+namespace weathergs::reconstruction {
 namespace {
 
 using testing::random_gaussians;
@@ -591,4 +591,4 @@ TEST(TrainerTest, OptionsAreValidated) {
 }
 
 }  // namespace
-}  // namespace weathergs::recon
+}  // namespace weathergs::reconstruction

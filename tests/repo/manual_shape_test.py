@@ -14,7 +14,7 @@ MAX_PAGE_LINES = 300   # a page a newcomer reads in one sitting
 MAX_STAGE_LINES = 40   # a stage that fits on a screen
 
 root = sys.argv[1]
-stages_file = sys.argv[2] if len(sys.argv) > 2 else "study/reconstruct.cc"
+stages_file = sys.argv[2] if len(sys.argv) > 2 else "methods/reconstruct.cc"
 errors = []
 
 

@@ -1,5 +1,5 @@
 // `weathergs train-led --init` (fine-tune given weights) and `--ignore-mask` (restoration/led_training.h):
-// the training path of the LED's test-time adaptation (study/led_adaptation.h).
+// the training path of the LED's test-time adaptation (adaptation/led_adaptation.h).
 #include <gtest/gtest.h>
 
 #include <filesystem>

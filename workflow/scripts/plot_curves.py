@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """What accuracy costs in time: test PSNR against training seconds, per variant, for every method.
 
-Reads the curve.json files that `weathergs reconstruct --eval-at ...` writes (docs/study.md) and
+Reads the curve.json files that `weathergs reconstruct --eval-at ...` writes (docs/methods.md) and
 writes OUT_CSV (one row per point: variant, method, seed, iteration, train_seconds, psnr, ssim,
 lpips, num_gaussians) and one PNG per variant in OUT_DIR (<variant>.png): PSNR against training
 seconds, one line per method through the mean over its seeds at each iteration; reference methods

@@ -1,6 +1,6 @@
 """Scene layouts, one module per scene type: the module's name is the type, its build(b, p, rng) builds
 the scene with a Builder b from the layout parameters p. The set of modules in this folder is the one
-list of scene types (datagen/CMakeLists.txt reads it at build time for the C++ validation)."""
+list of scene types (capture/CMakeLists.txt reads it at build time for the C++ validation)."""
 import importlib
 import os
 

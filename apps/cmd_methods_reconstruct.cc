@@ -1,0 +1,136 @@
+// `weathergs reconstruct`: one method on one dataset, end to end (methods/reconstruct.h, docs/methods.md).
+#include <cstdio>
+#include <memory>
+
+#include "apps/command.h"
+#include "apps/evaluator_flags.h"
+#include "apps/resources.h"
+#include "apps/train_flags.h"
+#include "core/parallel.h"
+#include "core/progress.h"
+#include "methods/reconstruct.h"
+
+namespace weathergs::cli {
+namespace {
+
+struct ReconstructArgs {
+  methods::ReconstructOptions options;
+  std::string method = "3dgs";
+  bool no_triangulate = false;
+  std::string led_weights, aef_weights;
+  double led_threshold = 0;
+  bool led_adapt = false;
+  int led_adapt_layouts = 0, led_adapt_iterations = 0;  // 0: LedAdaptOptions' defaults
+  TrainFlags train;
+  ScoringFlags scoring;
+};
+
+int run(ReconstructArgs& a) {
+  methods::ReconstructOptions o = a.options;
+  o.method = methods::parse_method(a.method, "--method");
+  o.points = a.no_triangulate ? methods::PointsPolicy::kDataset : methods::PointsPolicy::kAuto;
+  o.scoring = a.scoring.options();
+  a.train.apply(o.train);
+  const methods::Recipe& recipe = methods::spec(o.method).recipe;
+  if (recipe.needs_led_weights()) o.led_weights = find_led_weights(a.led_weights);
+  if (recipe.needs_aef_weights()) o.aef_weights = find_aef_weights(a.aef_weights);
+  if (a.led_adapt) {
+    o.led_adapt = adaptation::LedAdaptOptions{};
+    o.led_adapt->threads = num_threads();
+    if (a.led_adapt_layouts > 0) o.led_adapt->layouts = a.led_adapt_layouts;
+    if (a.led_adapt_iterations > 0) o.led_adapt->iterations = a.led_adapt_iterations;
+  }
+  if (a.led_threshold > 0) {  // a global threshold: the paper's rule, also for weights with a peak rule
+    o.led_mask.rule = restoration::LedThresholdRule::kAbove;
+    o.led_mask.threshold = a.led_threshold;
+  }
+  const bool nerf = recipe.backend == methods::BackendKind::kNerf;
+  const int total = nerf ? o.nerf.iterations : o.train.iterations;
+  ProgressBar bar("train", total);
+  int reported = 0;
+  auto on_iteration = [&](const reconstruction::IterationStats& st) {
+    if (reported++ == 0) bar.tick(st.iteration - 1);  // a resumed run starts part way
+    if (st.iteration % 10 == 0 || st.iteration == total) {
+      char s[120];
+      if (nerf)
+        std::snprintf(s, sizeof s, "it %d loss %.5f psnr %.2f", st.iteration, st.loss, st.psnr);
+      else
+        std::snprintf(s, sizeof s, "it %d loss %.4f n %lld", st.iteration, st.loss, static_cast<long long>(st.num_gaussians));
+      bar.set_status(s);
+    }
+    bar.tick();
+  };
+  auto on_stage = [&](const std::string& s) {
+    if (!is_quiet()) std::fprintf(stderr, "reconstruct: %s\n", s.c_str());
+  };
+  const methods::ReconstructResult r = methods::reconstruct(o, on_iteration, on_stage);
+  bar.finish();
+  const evaluator::Results& res = r.results;
+  std::printf("%s on %s (%zu test views): PSNR %s  SSIM %s  LPIPS %s | train %.1f s, render %.1f ms/view, "
+              "peak %.0f MiB | init: %s\nwrote %s/results.json\n",
+              res.method.c_str(), res.dataset.c_str(), res.per_view.size(),
+              evaluator::format_metric(res.metrics.psnr, 2).c_str(), evaluator::format_metric(res.metrics.ssim, 4).c_str(),
+              res.metrics.lpips ? evaluator::format_metric(*res.metrics.lpips, 4).c_str() : "skipped", r.train_seconds,
+              1000 * r.render_seconds_per_view, r.peak_rss_mb, r.initialization.c_str(), o.out.c_str());
+  return kExitOk;
+}
+
+Command make(CLI::App& root) {
+  auto a = std::make_shared<ReconstructArgs>();
+  std::string methods;
+  for (methods::Method m : methods::all_methods())
+    methods += std::string(methods.empty() ? "" : ", ") + methods::spec(m).name + " (" + methods::spec(m).description + ")";
+  CLI::App* sub = root.add_subcommand(
+      "reconstruct",
+      "Run one method on one dataset end to end: SfM points if missing, training, test renders, evaluation "
+      "(RUN/results.json). A stopped run resumes when started again.");
+  sub->add_option("--data", a->options.dataset, "Dataset folder")->required();
+  sub->add_option("--method", a->method, "Method: " + methods)->capture_default_str();
+  sub->add_option("--out", a->options.out, "Run folder")->required();
+  a->train.add_to(sub, a->options.train, a->options.checkpoint_every);
+  sub->add_option("--nerf-iterations", a->options.nerf.iterations,
+                  "Training iterations of the radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle; "
+                  "batches of " + std::to_string(a->options.nerf.batch_rays) + " rays; docs/nerf.md)")
+      ->capture_default_str()->check(CLI::PositiveNumber);
+  sub->add_option("--eval-at", a->options.eval_at,
+                  "Also score the test views at these iterations (comma-separated, e.g. 500,1000,2000): RUN/curve.json "
+                  "holds accuracy against training seconds; the radiance-field methods score at the same fractions of their run "
+                  "(docs/methods.md)")
+      ->delimiter(',');
+  sub->add_flag("--force", a->options.force,
+                "Start the run over: remove what an earlier run left at --out (a complete run, or stages made with "
+                "other settings, which are refused otherwise)");
+  sub->add_flag("--no-triangulate", a->no_triangulate,
+                "Never run COLMAP: without SfM points in the dataset, use the random initialization");
+  sub->add_option("--colmap", a->options.colmap.executable, "COLMAP executable")->capture_default_str();
+  sub->add_option("--led-weights", a->led_weights,
+                  "Lens Effect Detector weights stem (weathergs, weathergs-no-aef); default $WEATHERGS_LED_WEIGHTS, else "
+                  "the installed models/led/led");
+  sub->add_option("--aef-weights", a->aef_weights,
+                  "Learned AEF weights folder (derain, desnow, selector; weathergs, weathergs-no-led, weathergs-nerf); "
+                  "default $WEATHERGS_AEF_WEIGHTS, else the installed models/aef");
+  sub->add_option("--led-threshold", a->led_threshold,
+                  "LED mask where the attention >= t (default: the weights' calibrated rule, docs/restoration_led.md)")
+      ->check(CLI::Range(0.0, 1.0));
+  CLI::Option* adapt =
+      sub->add_flag("--led-adapt", a->led_adapt,
+                    "Adapt the LED to the dataset first (`detect --adapt`: a fine-tune on the training views with new "
+                    "lens drops, ~31 s on 2 cores for a quick-profile dataset, ~50 s at the paper profile; "
+                    "docs/record/led_adaptation.md)");
+  sub->add_option("--led-adapt-layouts", a->led_adapt_layouts,
+                  "Drop layouts of --led-adapt (`detect --adapt-layouts`; default 4)")
+      ->check(CLI::Range(1, adaptation::kMaxAdaptLayouts))
+      ->needs(adapt);
+  sub->add_option("--led-adapt-iterations", a->led_adapt_iterations,
+                  "A fixed iteration count for --led-adapt (`detect --adapt-iterations`; default ~7 passes over the "
+                  "examples; 1 layout x 10 iterations: docs/record/led_adaptation_brief.md)")
+      ->check(CLI::Range(1, adaptation::kMaxAdaptIterations))
+      ->needs(adapt);
+  a->scoring.add_to(sub);
+  return {sub, [a] { return run(*a); }};
+}
+
+}  // namespace
+}  // namespace weathergs::cli
+
+WGS_REGISTER_COMMAND(reconstruct, weathergs::cli::make)

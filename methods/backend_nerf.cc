@@ -1,0 +1,71 @@
+// The radiance-field backend: nerf/'s training run, which keeps its snapshots' renders itself.
+#include <algorithm>
+
+#include "methods/backend.h"
+
+namespace weathergs::methods {
+
+namespace {
+
+class FieldBackend final : public Backend {
+ public:
+  FieldBackend(BackendRun run, const nerf::NerfOptions& nerf) : run_(std::move(run)), nerf_(nerf) {}
+
+  int iterations() const override { return nerf_.iterations; }
+
+  std::vector<int> snapshots() const override {
+    std::vector<int> its = snapshot_iterations(run_.snapshots, iterations());
+    std::sort(its.begin(), its.end());
+    its.erase(std::unique(its.begin(), its.end()), its.end());
+    return its;
+  }
+
+  StageOutput model_output() const override { return nerf::nerf_run_output(run_.model_dir, iterations()); }
+
+  TrainOutcome train(const reconstruction::IterationCallback& on_iteration) override {
+    nerf::NerfRunOptions t;
+    t.dataset = run_.dataset;
+    t.inputs = run_.inputs;
+    t.out = run_.model_dir;
+    t.method = run_.method;
+    t.nerf = nerf_;
+    t.snapshot_at = snapshot_iterations(run_.snapshots, iterations());
+    t.force = true;  // no checkpoints: what an incomplete run left is replaced
+    const nerf::NerfRunResult r = nerf::train_nerf_run(t, [&](const nerf::NerfIterationStats& st) {
+      if (!on_iteration) return;
+      reconstruction::IterationStats is;
+      is.iteration = st.iteration;
+      is.loss = st.loss;
+      is.psnr = st.psnr;
+      on_iteration(is);
+    });
+    return {false, r.peak_rss_mb};
+  }
+
+  RenderOutcome render(const std::string& split, const std::string& out) override {
+    nerf::NerfRenderOptions r;
+    r.model = run_.model_dir;
+    r.dataset = run_.dataset;
+    r.split = split;
+    r.method = run_.method;
+    r.out = out;
+    const nerf::NerfRenderResult res = nerf::render_nerf_run(r);
+    return {res.views, res.render_seconds};
+  }
+
+  std::string snapshot_renders(int iteration, const std::string&) override {
+    return nerf::nerf_snapshot_dir(run_.model_dir, iteration);
+  }
+
+ private:
+  BackendRun run_;
+  nerf::NerfOptions nerf_;
+};
+
+}  // namespace
+
+std::unique_ptr<Backend> make_nerf_backend(BackendRun run, const nerf::NerfOptions& nerf) {
+  return std::make_unique<FieldBackend>(std::move(run), nerf);
+}
+
+}  // namespace weathergs::methods

@@ -1,0 +1,78 @@
+// workflow/Snakefile end to end on the tiny profile: one variant, two methods, one seed; then a
+// re-run does nothing and a removed result is the only cell run again.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+
+#include "core/atomic_file.h"
+#include "capture/process.h"
+#include "evaluator/results.h"
+#include "tests/core/test_util.h"
+
+namespace weathergs::methods {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
+  for (const char* tool : {"snakemake", "blender", "colmap"})
+    if (capture::find_executable(tool).empty()) GTEST_SKIP() << tool << " not installed";
+  testing::TempDir tmp;
+  const std::string src = WEATHERGS_SOURCE_DIR;
+  const std::string out = tmp / "suite";
+  const std::string cmd = "cd '" + std::string(tmp.path()) + "' && USER=${USER:-weathergs} snakemake -s " + src +
+                          "/workflow/Snakefile --cores 2 --config weathergs=" + WEATHERGS_BINARY + " scenes=" + src +
+                          "/scenes out=" + out + " cache=" + (tmp / "cache") +
+                          " 'variants=[pool_rain]' 'methods=[3dgs,oracle]' 'seeds=[1]' iterations=150";
+  auto run = [&](const std::string& log) {
+    const int st = std::system((cmd + " > '" + log + "' 2>&1").c_str());
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  };
+  ASSERT_EQ(run(tmp / "1.log"), 0) << read_file(tmp / "1.log");
+  const std::string md = read_file(out + "/leaderboard.md");
+  for (const char* m : {"3dgs", "oracle"}) EXPECT_NE(md.find(m), std::string::npos) << md;
+  EXPECT_TRUE(fs::exists(out + "/leaderboard.html"));
+  EXPECT_TRUE(fs::exists(out + "/report/index.html") && fs::exists(out + "/report/data.js"));  // the results browser
+  const std::string tables = read_file(out + "/tables.md");  // leaderboard --paper
+  EXPECT_NE(tables.find("## Table I: Rain"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("| oracle (reference) |"), std::string::npos) << tables;
+  EXPECT_NE(tables.find("computational cost"), std::string::npos) << tables;
+  // Accuracy against time: every run scored at 1/8, 1/4, 1/2 of its 150 iterations and at the end.
+  const std::string curves = read_file(out + "/curves.csv");
+  EXPECT_EQ(curves.rfind("variant,method,seed,iteration,train_seconds,psnr,ssim,lpips,num_gaussians\n", 0), 0u) << curves;
+  for (const char* row : {"pool_rain,3dgs,1,18,", "pool_rain,3dgs,1,150,", "pool_rain,oracle,1,75,"})
+    EXPECT_NE(curves.find(row), std::string::npos) << row << "\n" << curves;
+  EXPECT_EQ(read_file(out + "/curves/pool_rain.png").substr(1, 3), "PNG");
+  // NerfBaselines' layout next to ours.
+  const Json nb = read_json_file(out + "/nerfbaselines/pool_rain/3dgs/seed1/results.json");
+  EXPECT_EQ(nb.at("evaluation_protocol"), "default");
+  EXPECT_EQ(nb.at("predictions_sha256").get<std::string>().size(), 64u);
+  // Each cell's output reaches the terminal tagged with the cell, trainer progress included.
+  const std::string log1 = read_file(tmp / "1.log");
+  EXPECT_NE(log1.find("[pool_rain 3dgs seed1] "), std::string::npos) << log1;
+  EXPECT_NE(read_file(out + "/logs/reconstruct/pool_rain_3dgs_seed1.log").find("/150"), std::string::npos);
+  const evaluator::Results r3 = evaluator::read_results(out + "/runs/pool_rain/3dgs/seed1/results.json");
+  const evaluator::Results ro = evaluator::read_results(out + "/runs/pool_rain/oracle/seed1/results.json");
+  std::printf("tiny pool_rain, 150 iterations: 3dgs %.2f dB, oracle %.2f dB\n", r3.metrics.psnr, ro.metrics.psnr);
+  // Everything up to date: nothing runs.
+  ASSERT_EQ(run(tmp / "2.log"), 0) << read_file(tmp / "2.log");
+  EXPECT_NE(read_file(tmp / "2.log").find("Nothing to be done"), std::string::npos) << read_file(tmp / "2.log");
+  // One result gone (with the leaderboard that needs it: Snakemake does not rebuild an intermediate
+  // file that nothing out of date needs): only that cell and the leaderboard run again, the trained
+  // model is reused.
+  const std::string ply = read_file(out + "/runs/pool_rain/oracle/seed1/model/point_cloud.ply");
+  fs::remove(out + "/runs/pool_rain/oracle/seed1/results.json");
+  fs::remove(out + "/leaderboard.md");
+  ASSERT_EQ(run(tmp / "3.log"), 0) << read_file(tmp / "3.log");
+  const std::string log3 = read_file(tmp / "3.log");
+  EXPECT_EQ(log3.find("rule generate"), std::string::npos) << log3;
+  size_t jobs = 0;
+  for (size_t at = log3.find("rule reconstruct:"); at != std::string::npos; at = log3.find("rule reconstruct:", at + 1)) ++jobs;
+  EXPECT_EQ(jobs, 1u) << log3;
+  EXPECT_EQ(read_file(out + "/runs/pool_rain/oracle/seed1/model/point_cloud.ply"), ply);
+  EXPECT_TRUE(fs::exists(out + "/runs/pool_rain/oracle/seed1/results.json"));
+}
+
+}  // namespace
+}  // namespace weathergs::methods
