@@ -12,7 +12,7 @@
 #include "generator/lens/lens_render.h"
 #include "generator/weather.h"
 #include "generator/weather_spec.h"
-#include "restoration/detect_dataset.h"
+#include "restoration/led/detect_dataset.h"
 
 namespace weathergs::adaptation {
 namespace {
@@ -74,7 +74,7 @@ Json adapt_layout_spec(int k) {
                   {"glass_distance_m", kAdaptGlassDistanceM}}}}}};
 }
 
-restoration::LensDetector adapt_led(const restoration::LensDetector& base, const Dataset& ds,
+restoration::led::LensDetector adapt_led(const restoration::led::LensDetector& base, const Dataset& ds,
                                     const std::vector<std::string>& views, const std::vector<Image>& images,
                                     const LedAdaptOptions& o, Json& report) {
   o.validate();
@@ -95,7 +95,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   }
 
   // The scene's own drops are unlabelled: leave out where the base network may see them.
-  const Image averaged = restoration::mean_attention(base, rgb, ds.root);
+  const Image averaged = restoration::led::mean_attention(base, rgb, ds.root);
   const Image ignore = ignore_region(averaged, o.ignore_level, o.ignore_dilations);
   double ignored = 0;
   for (float v : ignore.data) ignored += v;
@@ -108,7 +108,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   const Eigen::Vector3f sky = generator::mean_sky_radiance(sky_per_view);
 
   // New drops over every view, layout after layout; the example order is layout-major, view order.
-  std::vector<restoration::LedExample> examples(size_t(o.layouts) * views.size());
+  std::vector<restoration::led::LedExample> examples(size_t(o.layouts) * views.size());
   Json layouts = Json::array();
   {
     ProgressBar bar("LED adaptation: drops", int64_t(examples.size()));
@@ -125,7 +125,7 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
         const Camera& cam = applied[size_t(i)];
         generator::lens::LensViewResult r = renderer.render(linear[size_t(i)], cam, cam.time_s, &sky);
         require_finite(r.image, "internal: LED adaptation view '" + views[size_t(i)] + "'");
-        restoration::LedExample& e = examples[size_t(k) * views.size() + size_t(i)];
+        restoration::led::LedExample& e = examples[size_t(k) * views.size() + size_t(i)];
         e.image = quantize_uint8(to_srgb(r.image));  // what the view would be as a PNG
         e.mask = std::move(r.mask);
         e.group = k;
@@ -145,8 +145,8 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
     }
   }
 
-  restoration::LensDetector adapted = base.clone();
-  restoration::LedTrainOptions t;
+  restoration::led::LensDetector adapted = base.clone();
+  restoration::led::LedTrainOptions t;
   t.arch = base.architecture();
   t.iterations = iterations;
   t.batch = o.batch;
@@ -155,8 +155,8 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
   t.threads = o.threads;
   t.gradient = kAdaptGradient;
   t.progress = o.progress;
-  const restoration::LedTrainRecord rec = adapted.train(examples, t);
-  restoration::use_adapted_peak_rule(adapted);
+  const restoration::led::LedTrainRecord rec = adapted.train(examples, t);
+  restoration::led::use_adapted_peak_rule(adapted);
   report = Json{{"method", "fine-tune on the training views with new lens drops (docs/restoration_led.md, \"Adapted to the scene\")"},
                 {"views", views},
                 {"layouts", layouts},
@@ -180,11 +180,11 @@ Json adaptation_settings_json(const LedAdaptOptions& o, size_t train_views) {
               {"seed", o.seed},
               {"ignore_level", o.ignore_level},
               {"ignore_dilations", o.ignore_dilations},
-              {"gradient", restoration::to_string(kAdaptGradient)}};
+              {"gradient", restoration::led::to_string(kAdaptGradient)}};
 }
 
-restoration::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options) {
-  return [options](const restoration::LensDetector& base, const Dataset& dataset, const std::vector<std::string>& views,
+restoration::led::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options) {
+  return [options](const restoration::led::LensDetector& base, const Dataset& dataset, const std::vector<std::string>& views,
                    const std::vector<Image>& images, Json& report) { return adapt_led(base, dataset, views, images, options, report); };
 }
 

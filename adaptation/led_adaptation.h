@@ -18,8 +18,8 @@
 #include "core/dataset.h"
 #include "core/image.h"
 #include "core/json_reader.h"
-#include "restoration/detect_dataset.h"
-#include "restoration/lens_detector.h"
+#include "restoration/led/detect_dataset.h"
+#include "restoration/led/lens_detector.h"
 
 namespace weathergs::adaptation {
 
@@ -60,7 +60,7 @@ inline constexpr uint64_t kAdaptSeedBase = 9000;
 inline constexpr int kMaxAdaptLayouts = 64;
 inline constexpr int kMaxAdaptIterations = 100000;
 // The fine-tune's gradient: per example, so the adapted network does not depend on the thread count.
-inline constexpr restoration::LedGradient kAdaptGradient = restoration::LedGradient::kPerExample;
+inline constexpr restoration::led::LedGradient kAdaptGradient = restoration::led::LedGradient::kPerExample;
 inline constexpr double kAdaptRadiusMm[2] = {0.3, 1.5};
 inline constexpr double kAdaptGlassDistanceM = 0.015;
 
@@ -69,8 +69,8 @@ Json adapt_layout_spec(int k);
 
 // The copy of `base` fine-tuned on `images` (sRGB, the training views `views` of `dataset`, in dataset
 // order). `report` gets the options, the layouts, the ignored fraction, the loss and the seconds.
-// The same network whatever the thread count (restoration::LedGradient::kPerExample).
-restoration::LensDetector adapt_led(const restoration::LensDetector& base, const Dataset& dataset,
+// The same network whatever the thread count (restoration::led::LedGradient::kPerExample).
+restoration::led::LensDetector adapt_led(const restoration::led::LensDetector& base, const Dataset& dataset,
                                     const std::vector<std::string>& views, const std::vector<Image>& images,
                                     const LedAdaptOptions& options, Json& report);
 
@@ -81,8 +81,8 @@ restoration::LensDetector adapt_led(const restoration::LensDetector& base, const
 // settings_mismatch (core/json_reader.h; methods/reconstruct).
 Json adaptation_settings_json(const LedAdaptOptions& options, size_t train_views);
 
-// adapt_led with `options` as restoration::detect_dataset's adapt hook (`detect --adapt`,
+// adapt_led with `options` as restoration::led::detect_dataset's adapt hook (`detect --adapt`,
 // `reconstruct --led-adapt`).
-restoration::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options);
+restoration::led::LedAdaptation led_adaptation_hook(const LedAdaptOptions& options);
 
 }  // namespace weathergs::adaptation

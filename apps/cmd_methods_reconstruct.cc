@@ -41,7 +41,7 @@ int run(ReconstructArgs& a) {
     if (a.led_adapt_iterations > 0) o.led_adapt->iterations = a.led_adapt_iterations;
   }
   if (a.led_threshold > 0) {  // a global threshold: the paper's rule, also for weights with a peak rule
-    o.led_mask.rule = restoration::LedThresholdRule::kAbove;
+    o.led_mask.rule = restoration::led::LedThresholdRule::kAbove;
     o.led_mask.threshold = a.led_threshold;
   }
   const bool nerf = recipe.backend == methods::BackendKind::kNerf;

@@ -6,19 +6,19 @@
 #include "apps/command.h"
 #include "apps/led_scores.h"
 #include "apps/resources.h"
-#include "restoration/led_training.h"
+#include "restoration/led/led_training.h"
 
 namespace weathergs::cli {
 namespace {
 
 struct CalibrateLedArgs {
   std::string weights, out;
-  restoration::RecalibrateLedOptions options;
+  restoration::led::RecalibrateLedOptions options;
 };
 
 int run(const CalibrateLedArgs& a) {
   const std::string weights = find_led_weights(a.weights);
-  const restoration::LedCalibration c = restoration::recalibrate_led(weights, a.out, a.options);
+  const restoration::led::LedCalibration c = restoration::led::recalibrate_led(weights, a.out, a.options);
   if (!a.options.adapted) {
     std::printf("calibrated threshold %.3f for %d dilations: mean IoU %.3f, precision %.3f over held-out datasets with drops\n",
                 c.threshold, c.dilate_iterations, c.mean_iou, c.mean_precision);

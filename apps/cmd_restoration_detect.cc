@@ -6,7 +6,7 @@
 #include "apps/command.h"
 #include "apps/resources.h"
 #include "core/parallel.h"
-#include "restoration/detect_dataset.h"
+#include "restoration/led/detect_dataset.h"
 #include "adaptation/led_adaptation.h"
 
 namespace weathergs::cli {
@@ -21,13 +21,13 @@ struct DetectArgs {
   bool adapt = false;
   int adapt_iterations = 0;  // 0: from adapt_options.passes
   adaptation::LedAdaptOptions adapt_options;
-  restoration::DetectDatasetOptions options;
+  restoration::led::DetectDatasetOptions options;
 };
 
-std::string describe_rule(const restoration::LedMaskOptions& m) {
+std::string describe_rule(const restoration::led::LedMaskOptions& m) {
   switch (*m.rule) {
-    case restoration::LedThresholdRule::kBand: return fmt::format("rule band [{:.3f}, {:.3f}]", m.band_lo, m.band_hi);
-    case restoration::LedThresholdRule::kPeak:
+    case restoration::led::LedThresholdRule::kBand: return fmt::format("rule band [{:.3f}, {:.3f}]", m.band_lo, m.band_hi);
+    case restoration::led::LedThresholdRule::kPeak:
       return fmt::format("rule peak (low {:.3f}, seed {:.3f}, fraction {:.3f})", m.peak->low, m.peak->seed, m.peak->fraction);
     default: return fmt::format("rule above t {:.3f}", *m.threshold);
   }
@@ -36,12 +36,12 @@ std::string describe_rule(const restoration::LedMaskOptions& m) {
 int run(DetectArgs& a) {
   a.options.weights = find_led_weights(a.weights);
   a.options.images_dir = a.images;
-  a.options.averaging = a.per_view ? restoration::LedAveraging::kPerView : restoration::LedAveraging::kTrainViews;
-  if (a.rule == "band") a.options.mask.rule = restoration::LedThresholdRule::kBand;
-  if (a.rule == "above" || (a.rule.empty() && a.threshold > 0)) a.options.mask.rule = restoration::LedThresholdRule::kAbove;
-  if (a.rule == "peak" || (a.rule.empty() && !a.peak.empty())) a.options.mask.rule = restoration::LedThresholdRule::kPeak;
+  a.options.averaging = a.per_view ? restoration::led::LedAveraging::kPerView : restoration::led::LedAveraging::kTrainViews;
+  if (a.rule == "band") a.options.mask.rule = restoration::led::LedThresholdRule::kBand;
+  if (a.rule == "above" || (a.rule.empty() && a.threshold > 0)) a.options.mask.rule = restoration::led::LedThresholdRule::kAbove;
+  if (a.rule == "peak" || (a.rule.empty() && !a.peak.empty())) a.options.mask.rule = restoration::led::LedThresholdRule::kPeak;
   if (a.threshold > 0) a.options.mask.threshold = a.threshold;
-  if (!a.peak.empty()) a.options.mask.peak = restoration::LedPeakRule{a.peak[0], a.peak[1], a.peak[2]};
+  if (!a.peak.empty()) a.options.mask.peak = restoration::led::LedPeakRule{a.peak[0], a.peak[1], a.peak[2]};
   a.options.mask.band_lo = a.band[0];
   a.options.mask.band_hi = a.band[1];
   if (a.adapt) {
@@ -49,12 +49,12 @@ int run(DetectArgs& a) {
     a.adapt_options.validate();
     a.options.adapt = adaptation::led_adaptation_hook(a.adapt_options);
   }
-  const restoration::DetectDatasetReport r = restoration::detect_dataset(a.data, a.out, a.options);
+  const restoration::led::DetectDatasetReport r = restoration::led::detect_dataset(a.data, a.out, a.options);
   double mean = 0;
   for (const auto& v : r.views) mean += v.mask_fraction / double(r.views.size());
   std::printf("detected lens drops on %zu views in %.2f s (%.1f ms per view in the network), %s, %s, %d dilations: "
               "%.1f%% of the pixels masked on average\nwrote %s\n",
-              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::to_string(a.options.averaging),
+              r.views.size(), r.seconds, 1000 * r.seconds_per_view, restoration::led::to_string(a.options.averaging),
               describe_rule(r.mask).c_str(), *r.mask.dilate_iterations, 100 * mean, a.out.c_str());
   if (r.ground_truth)
     std::printf("against the dataset's masks/lens: IoU %.3f  precision %.3f  recall %.3f (drops on %.2f%% of the pixels)\n",
@@ -91,7 +91,7 @@ Command make(CLI::App& root) {
   sub->add_option("--band", a->band, "The band of --rule band")->expected(2)->capture_default_str();
   sub->add_option("--dilate", a->options.mask.dilate_iterations,
                   "3x3 dilations of the mask (default: the weights' calibrated count; 3 with --rule band)")
-      ->check(CLI::Range(0, restoration::kMaxDilations));
+      ->check(CLI::Range(0, restoration::led::kMaxDilations));
   sub->add_flag("--save-attention", a->options.save_attention,
                 "Also write the soft attention behind each mask as attention/<view>.png (16-bit, value = attention)");
   CLI::Option* adapt =

@@ -6,12 +6,12 @@
 
 #include "apps/command.h"
 #include "apps/resources.h"
-#include "restoration/filter_dataset.h"
+#include "restoration/aef/filter_dataset.h"
 
 namespace weathergs::cli {
 namespace {
 
-namespace r = weathergs::restoration;
+namespace r = weathergs::restoration::aef;
 
 struct FilterArgs {
   std::string data, out, images = "images", mode = "restore", method = "learned", task = "auto", select = "per-scene";

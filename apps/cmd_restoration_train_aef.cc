@@ -4,12 +4,12 @@
 #include <memory>
 
 #include "apps/command.h"
-#include "restoration/aef_training.h"
+#include "restoration/aef/aef_training.h"
 
 namespace weathergs::cli {
 namespace {
 
-namespace r = weathergs::restoration;
+namespace r = weathergs::restoration::aef;
 
 struct TrainAefArgs {
   std::vector<std::string> data, held_out;

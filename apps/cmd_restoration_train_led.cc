@@ -4,7 +4,7 @@
 
 #include "apps/command.h"
 #include "apps/led_scores.h"
-#include "restoration/led_training.h"
+#include "restoration/led/led_training.h"
 
 namespace weathergs::cli {
 namespace {
@@ -12,15 +12,15 @@ namespace {
 struct TrainLedArgs {
   std::vector<std::string> data, held_out;
   std::string out;
-  restoration::TrainLedOptions options;
+  restoration::led::TrainLedOptions options;
   std::string view_pooling = "none";
   std::string command;
 };
 
 int run(TrainLedArgs& a) {
   a.options.command = a.command;
-  a.options.train.arch.view_pooling = restoration::parse_led_view_pooling(a.view_pooling, "--view-pooling");
-  const restoration::TrainLedResult r = restoration::train_led(a.data, a.held_out, a.out, a.options);
+  a.options.train.arch.view_pooling = restoration::led::parse_led_view_pooling(a.view_pooling, "--view-pooling");
+  const restoration::led::TrainLedResult r = restoration::led::train_led(a.data, a.held_out, a.out, a.options);
   std::printf("trained the LED on %zu views (%lld parameters) in %.1f s; loss %.4f -> %.4f\n", r.examples,
               static_cast<long long>(r.record.parameters), r.record.seconds,
               r.record.loss_curve.empty() ? 0.0 : r.record.loss_curve.front(),
@@ -30,7 +30,7 @@ int run(TrainLedArgs& a) {
                 r.calibration.threshold, r.calibration.dilate_iterations, r.calibration.mean_iou);
     print_led_scores(r.calibration.scores);
     if (r.calibration.peak) {
-      const restoration::LedPeakRule& p = *r.calibration.peak;
+      const restoration::led::LedPeakRule& p = *r.calibration.peak;
       std::printf("calibrated peak rule (low %.2f, seed %.2f, fraction %.2f): mean IoU %.3f\n", p.low, p.seed, p.fraction,
                   r.calibration.peak_mean_iou);
       print_led_scores(r.calibration.peak_scores);
@@ -66,7 +66,7 @@ Command make(CLI::App& root) {
       ->capture_default_str();
   CLI::Option* dilate = sub->add_option("--dilate", a->options.mask.dilate_iterations,
                                         "3x3 dilations the threshold is calibrated for and stored with (default 3, the released code's)")
-                            ->check(CLI::Range(0, restoration::kMaxDilations));
+                            ->check(CLI::Range(0, restoration::led::kMaxDilations));
   sub->add_flag("--calibrate-dilation", a->options.calibrate_dilations,
                 "Choose the dilations (0..3) with the threshold for the held-out mask IoU (higher IoU, worse reconstructions: "
                 "docs/restoration_led.md)")

@@ -4,11 +4,11 @@
 #include <cstdio>
 #include <vector>
 
-#include "restoration/detect_dataset.h"
+#include "restoration/led/detect_dataset.h"
 
 namespace weathergs::cli {
 
-inline void print_led_scores(const std::vector<restoration::LedScore>& scores) {
+inline void print_led_scores(const std::vector<restoration::led::LedScore>& scores) {
   for (const auto& s : scores)
     std::printf("  %-32s IoU %.3f  precision %.3f  recall %.3f  (drops on %.2f%% of pixels, masked %.2f%%)\n", s.dataset.c_str(),
                 s.iou, s.precision, s.recall, 100 * s.gt_fraction, 100 * s.mask_fraction);

@@ -8,15 +8,17 @@
 
 #include "core/parallel.h"
 #include "core/rng.h"
-#include "restoration/aef_plugin.h"
-#include "restoration/lens_detector.h"
-#include "restoration/particle_filter.h"
-#include "restoration/weather_selector.h"
+#include "restoration/aef/aef_plugin.h"
+#include "restoration/led/lens_detector.h"
+#include "restoration/aef/particle_filter.h"
+#include "restoration/aef/weather_selector.h"
 
 namespace {
 
 using namespace weathergs;
 using namespace weathergs::restoration;
+using namespace weathergs::restoration::aef;
+using namespace weathergs::restoration::led;
 
 Image view(int w, int h) {
   Image a(w, h, 3);

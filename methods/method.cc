@@ -10,7 +10,7 @@ namespace {
 
 using reconstruction::TrainImages;
 using reconstruction::TrainMasks;
-using restoration::FilterMethod;
+using restoration::aef::FilterMethod;
 
 // Recipe builders, so that each row of the table below states only what sets its method apart.
 constexpr Recipe clean(Recipe r) {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "reconstruction/run.h"
-#include "restoration/filter_dataset.h"
+#include "restoration/aef/filter_dataset.h"
 
 namespace weathergs::methods {
 
@@ -17,7 +17,7 @@ enum class Method {
   k3dgs,     // vanilla 3DGS on the weathered images (the paper's baseline)
   kOracle,   // 3DGS on the clean images and their SfM points: the upper bound
   kGtMasks,  // 3DGS on the weathered images with the generator's particle and lens masks excluded
-  kAefTophat,  // the classical AEF (restoration/particle_filter.h) on every view, then 3DGS on the
+  kAefTophat,  // the classical AEF (restoration/aef/particle_filter.h) on every view, then 3DGS on the
                // filtered images: WeatherGS's first stage without learned weights and without the LED
   kWeatherGS,       // AEF (learned plugins, selector on the scene) -> LED on the filtered views, averaged
                     // over the training views -> 3DGS on the filtered images, LED mask excluded from the loss
@@ -48,7 +48,7 @@ struct Recipe {
   bool particle_filter = false;  // train on the AEF's restored images (RUN/filtered/)
   // Which AEF: the learned derain/desnow plugins with the weather selector deciding per scene (the
   // better one on the benchmark, docs/restoration.md), or the classical top-hat on every view.
-  restoration::FilterMethod aef = restoration::FilterMethod::kLearned;
+  restoration::aef::FilterMethod aef = restoration::aef::FilterMethod::kLearned;
   // Exclude the LED's mask (RUN/detected/) from the loss. The LED always looks at the raw views:
   // on the learned AEF's output it masked 44.5% of pool_rain (IoU 0.22 with the true drops) against
   // 16.6% (IoU 0.41) on the top-hat's, because the plugins' smoothed regions read as defocused
@@ -61,7 +61,7 @@ struct Recipe {
 
   // The weight files the method needs: the LED's stem, the learned AEF's folder.
   constexpr bool needs_led_weights() const { return lens_detector; }
-  constexpr bool needs_aef_weights() const { return particle_filter && aef == restoration::FilterMethod::kLearned; }
+  constexpr bool needs_aef_weights() const { return particle_filter && aef == restoration::aef::FilterMethod::kLearned; }
 };
 
 // One row per method: everything the program knows about it has this one home.

@@ -7,8 +7,8 @@
 #include "core/dataset_layout.h"
 #include "core/error.h"
 #include "core/json_reader.h"
-#include "restoration/detect_dataset.h"
-#include "restoration/filter_dataset.h"
+#include "restoration/led/detect_dataset.h"
+#include "restoration/aef/filter_dataset.h"
 #include "methods/backend.h"
 
 namespace weathergs::methods {
@@ -122,39 +122,39 @@ Points points_stage(const Run& run) {
 // 2. The AEF on every view, kept when an earlier run made it with these settings.
 void filter_stage(const Run& run) {
   if (!run.recipe().particle_filter) return;
-  restoration::FilterDatasetOptions f;
+  restoration::aef::FilterDatasetOptions f;
   f.filter = run.o.particle_filter;
   f.method = run.recipe().aef;
   if (run.recipe().needs_aef_weights()) {
-    f.task = restoration::AefTask::kAuto;  // the selector decides, per scene, which plugin (or none)
+    f.task = restoration::aef::AefTask::kAuto;  // the selector decides, per scene, which plugin (or none)
     f.aef_weights = run.o.aef_weights;
   }
   const std::string out = (run.dir / kFilteredDir).string();
   const int width = run.ds.cameras.empty() ? 0 : run.ds.cameras.front().width;
-  if (current_or_refuse(restoration::filter_output(out, f, width), "AEF images").state == StageOutput::State::kComplete)
+  if (current_or_refuse(restoration::aef::filter_output(out, f, width), "AEF images").state == StageOutput::State::kComplete)
     return;
-  run.stage(std::string("filtering particles (AEF: ") + restoration::to_string(run.recipe().aef) + ") on every view");
-  restoration::filter_dataset(run.o.dataset, out, f);
+  run.stage(std::string("filtering particles (AEF: ") + restoration::aef::to_string(run.recipe().aef) + ") on every view");
+  restoration::aef::filter_dataset(run.o.dataset, out, f);
 }
 
 // 3. The LED on the raw views (method.h says why), averaged over the training views unless the
 // method asks for per-view maps (which also rules out adapting to drops fixed to the lens).
 void detect_stage(const Run& run) {
   if (!run.recipe().lens_detector) return;
-  restoration::DetectDatasetOptions d;
+  restoration::led::DetectDatasetOptions d;
   d.weights = run.o.led_weights;
   d.mask = run.o.led_mask;
-  if (run.recipe().led_per_view) d.averaging = restoration::LedAveraging::kPerView;
+  if (run.recipe().led_per_view) d.averaging = restoration::led::LedAveraging::kPerView;
   const std::optional<adaptation::LedAdaptOptions> adapt =
       run.recipe().led_per_view ? std::nullopt : run.o.led_adapt;
   const Json adaptation = adapt ? adaptation::adaptation_settings_json(*adapt, run.ds.split("train").size()) : Json();
   const std::string out = (run.dir / kDetectedDir).string();
-  if (current_or_refuse(restoration::detect_output(out, d, adaptation), "LED masks").state ==
+  if (current_or_refuse(restoration::led::detect_output(out, d, adaptation), "LED masks").state ==
       StageOutput::State::kComplete)
     return;
   run.stage("detecting lens drops (LED, averaged over the training views)");
   if (adapt) d.adapt = adaptation::led_adaptation_hook(*adapt);
-  restoration::detect_dataset(run.o.dataset, out, d);
+  restoration::led::detect_dataset(run.o.dataset, out, d);
 }
 
 // The method's backend on the inputs its recipe names, snapshots at eval_at's fractions of the run.
@@ -200,7 +200,7 @@ TrainOutcome train_stage(const Run& run, Backend& backend, const reconstruction:
 // made with other weights (evaluator/check.h).
 Json weights_record(const Run& run) {
   Json w = Json::object();
-  const fs::path filter_report = run.dir / kFilteredDir / restoration::kFilterReportFile;
+  const fs::path filter_report = run.dir / kFilteredDir / restoration::aef::kFilterReportFile;
   if (run.recipe().particle_filter && fs::exists(filter_report)) {
     const Json f = read_json_file(filter_report.string());
     if (f.contains("weights")) {
@@ -209,7 +209,7 @@ Json weights_record(const Run& run) {
       w["aef"] = aef;
     }
   }
-  const fs::path detect_report = run.dir / kDetectedDir / restoration::kDetectReportFile;
+  const fs::path detect_report = run.dir / kDetectedDir / restoration::led::kDetectReportFile;
   if (run.recipe().lens_detector && fs::exists(detect_report))
     w["led"] = read_json_file(detect_report.string()).value("weights_sha256", "");
   return w;
@@ -236,9 +236,9 @@ evaluator::Results evaluate_stage(const Run& run, const std::string& renders_dir
     return fs::exists(report) ? read_json_file(report.string()).value("seconds", 0.0) : 0.0;
   };
   if (run.recipe().particle_filter)
-    res.method_info["filter_seconds"] = report_seconds(run.dir / kFilteredDir / restoration::kFilterReportFile);
+    res.method_info["filter_seconds"] = report_seconds(run.dir / kFilteredDir / restoration::aef::kFilterReportFile);
   if (run.recipe().lens_detector)
-    res.method_info["detect_seconds"] = report_seconds(run.dir / kDetectedDir / restoration::kDetectReportFile);
+    res.method_info["detect_seconds"] = report_seconds(run.dir / kDetectedDir / restoration::led::kDetectReportFile);
   return res;
 }
 

@@ -27,8 +27,8 @@
 #include "evaluator/evaluate.h"
 #include "nerf/run.h"
 #include "reconstruction/run.h"
-#include "restoration/detect_dataset.h"
-#include "restoration/particle_filter.h"
+#include "restoration/led/detect_dataset.h"
+#include "restoration/aef/particle_filter.h"
 #include "adaptation/led_adaptation.h"
 #include "methods/method.h"
 
@@ -58,12 +58,12 @@ struct ReconstructOptions {
   PointsPolicy points = PointsPolicy::kAuto;
   capture::ColmapOptions colmap;
   evaluator::ScoringOptions scoring;
-  restoration::ParticleFilterOptions particle_filter;  // the top-hat's parameters (aef-tophat)
-  // The learned AEF's weights folder (derain, desnow, selector; restoration/filter_dataset.h): required
+  restoration::aef::ParticleFilterOptions particle_filter;  // the top-hat's parameters (aef-tophat)
+  // The learned AEF's weights folder (derain, desnow, selector; restoration/aef/filter_dataset.h): required
   // by weathergs, weathergs-no-led and weathergs-nerf.
   std::string aef_weights;
   std::string led_weights;  // weathergs, weathergs-no-aef: the LED weights stem (required for them)
-  restoration::LedMaskOptions led_mask;
+  restoration::led::LedMaskOptions led_mask;
   // Adapt the LED to the dataset before it runs (`detect --adapt`; docs/restoration_led.md, "Adapted to
   // the scene"). Unset: the weights as they are. Ignored by weathergs-per-view (drops that move).
   std::optional<adaptation::LedAdaptOptions> led_adapt;

@@ -11,7 +11,7 @@ PACKAGES=(
   libeigen3-dev libopencv-dev libopenimageio-dev openimageio-tools libembree-dev
   nlohmann-json3-dev libtbb-dev libcli11-dev libfmt-dev libsqlite3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  # the learned restoration networks (restoration/lens_detector.cc)
+  # the learned restoration networks (restoration/led/lens_detector.cc)
   libtorch-dev
   # scene rendering and structure from motion
   blender colmap

@@ -9,8 +9,8 @@
 #include "core/rng.h"
 #include "core/json_reader.h"
 #include "core/parallel.h"
-#include "restoration/detect_dataset.h"
-#include "restoration/led_training.h"
+#include "restoration/led/detect_dataset.h"
+#include "restoration/led/led_training.h"
 #include "adaptation/led_adaptation.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
@@ -19,7 +19,7 @@ namespace weathergs::adaptation {
 namespace {
 
 namespace fs = std::filesystem;
-using restoration::LensDetector;
+using restoration::led::LensDetector;
 
 using restoration::testing_util::tiny_arch;
 
@@ -181,7 +181,7 @@ TEST(LedAdaptationTest, DetectAdaptsThroughItsHookAndRefusesPerViewAveraging) {
   testing::TempDir tmp;
   const Scene s = drop_scene(tmp / "scene");
   LensDetector(tiny_arch(), 3).save(tmp / "w", Json::object());
-  restoration::DetectDatasetOptions d;
+  restoration::led::DetectDatasetOptions d;
   d.weights = tmp / "w";
   int calls = 0;
   d.adapt = [&](const LensDetector& base, const Dataset& ds, const std::vector<std::string>& views,
@@ -190,13 +190,13 @@ TEST(LedAdaptationTest, DetectAdaptsThroughItsHookAndRefusesPerViewAveraging) {
     EXPECT_EQ(views, s.views);  // the training views only, in dataset order
     return adapt_led(base, ds, views, images, small_options(), report);
   };
-  restoration::detect_dataset(tmp / "scene", tmp / "masks", d);
+  restoration::led::detect_dataset(tmp / "scene", tmp / "masks", d);
   EXPECT_EQ(calls, 1);
-  const Json j = read_json_file((fs::path(tmp / "masks") / restoration::kDetectReportFile).string());
+  const Json j = read_json_file((fs::path(tmp / "masks") / restoration::led::kDetectReportFile).string());
   EXPECT_EQ(j["adaptation"]["layouts"].size(), 2u);
   for (const Camera& c : s.ds.cameras) EXPECT_TRUE(fs::exists(fs::path(tmp / "masks") / (c.name + ".png")));
-  d.averaging = restoration::LedAveraging::kPerView;
-  EXPECT_THROW(restoration::detect_dataset(tmp / "scene", tmp / "masks2", d), InputError);
+  d.averaging = restoration::led::LedAveraging::kPerView;
+  EXPECT_THROW(restoration::led::detect_dataset(tmp / "scene", tmp / "masks2", d), InputError);
   EXPECT_FALSE(fs::exists(tmp / "masks2"));
 }
 
@@ -207,26 +207,26 @@ TEST(LedAdaptationTest, DetectAdaptUsesTheAdaptedRuleCalibratedOnAdaptedMaps) {
   testing::TempDir tmp;
   const Scene s = drop_scene(tmp / "scene");
   LensDetector w(tiny_arch(), 3);
-  w.set_peak_rule(restoration::LedPeakRule{0.3, 0.3, 0.7});
+  w.set_peak_rule(restoration::led::LedPeakRule{0.3, 0.3, 0.7});
   w.save(tmp / "w", Json::object());
-  restoration::DetectDatasetOptions d;
+  restoration::led::DetectDatasetOptions d;
   d.weights = tmp / "w";
   d.save_attention = true;
   d.adapt = [&](const LensDetector& base, const Dataset& ds, const std::vector<std::string>& views,
                 const std::vector<Image>& images, Json& report) {
     return adapt_led(base, ds, views, images, small_options(), report);
   };
-  restoration::detect_dataset(tmp / "scene", tmp / "adapted", d);
+  restoration::led::detect_dataset(tmp / "scene", tmp / "adapted", d);
   Json j = read_json_file(tmp / "adapted/detect.json");
   EXPECT_EQ(j["adaptation"]["peak_rule"], "peak_rule");  // no adapted rule yet: the weights' own
   EXPECT_DOUBLE_EQ(j["peak_rule"]["fraction"].get<double>(), 0.7);
 
-  restoration::RecalibrateLedOptions c;
+  restoration::led::RecalibrateLedOptions c;
   c.maps = {tmp / "adapted"};
   c.adapted = true;
   c.search_peak = true;
   c.command = "test";
-  const restoration::LedCalibration cal = restoration::recalibrate_led(tmp / "w", tmp / "w2", c);
+  const restoration::led::LedCalibration cal = restoration::led::recalibrate_led(tmp / "w", tmp / "w2", c);
   ASSERT_TRUE(cal.peak);
   const LensDetector w2 = LensDetector::load(tmp / "w2");
   ASSERT_TRUE(w2.adapted_peak_rule());
@@ -238,28 +238,28 @@ TEST(LedAdaptationTest, DetectAdaptUsesTheAdaptedRuleCalibratedOnAdaptedMaps) {
   EXPECT_EQ(w2j["adapted_calibration"]["adaptations"][0]["iterations"].get<int>(), 6);
   EXPECT_FALSE(w2j.contains("calibration"));  // --adapted writes only its own record
   // Non-adapted maps are refused for the adapted rule.
-  restoration::DetectDatasetOptions plain = d;
+  restoration::led::DetectDatasetOptions plain = d;
   plain.adapt = nullptr;
-  restoration::detect_dataset(tmp / "scene", tmp / "plain", plain);
+  restoration::led::detect_dataset(tmp / "scene", tmp / "plain", plain);
   c.maps = {tmp / "plain"};
-  EXPECT_THROW(restoration::recalibrate_led(tmp / "w", tmp / "w3", c), InputError);
+  EXPECT_THROW(restoration::led::recalibrate_led(tmp / "w", tmp / "w3", c), InputError);
   EXPECT_FALSE(fs::exists(tmp / "w3.json"));
 
   // An adapted rule that differs from the plain one, to tell which one detect used.
   LensDetector w4 = LensDetector::load(tmp / "w");
-  w4.set_adapted_peak_rule(restoration::LedPeakRule{0.4, 0.5, 0.85});
+  w4.set_adapted_peak_rule(restoration::led::LedPeakRule{0.4, 0.5, 0.85});
   w4.save(tmp / "w4", Json::object());
   d.weights = plain.weights = tmp / "w4";
-  restoration::detect_dataset(tmp / "scene", tmp / "adapted4", d);
+  restoration::led::detect_dataset(tmp / "scene", tmp / "adapted4", d);
   j = read_json_file(tmp / "adapted4/detect.json");
   EXPECT_EQ(j["adaptation"]["peak_rule"], "adapted_peak_rule");
   EXPECT_DOUBLE_EQ(j["peak_rule"]["fraction"].get<double>(), 0.85);
   EXPECT_DOUBLE_EQ(j["peak_rule"]["low"].get<double>(), 0.4);
-  restoration::detect_dataset(tmp / "scene", tmp / "plain4", plain);
+  restoration::led::detect_dataset(tmp / "scene", tmp / "plain4", plain);
   EXPECT_DOUBLE_EQ(read_json_file(tmp / "plain4/detect.json")["peak_rule"]["fraction"].get<double>(), 0.7);
   // An explicit --peak still overrides both.
-  d.mask.peak = restoration::LedPeakRule{0.2, 0.2, 0.5};
-  restoration::detect_dataset(tmp / "scene", tmp / "override", d);
+  d.mask.peak = restoration::led::LedPeakRule{0.2, 0.2, 0.5};
+  restoration::led::detect_dataset(tmp / "scene", tmp / "override", d);
   EXPECT_DOUBLE_EQ(read_json_file(tmp / "override/detect.json")["peak_rule"]["fraction"].get<double>(), 0.5);
 }
 

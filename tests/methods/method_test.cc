@@ -32,7 +32,7 @@ TEST(MethodTest, WeightsNeededFollowTheRecipe) {
   for (Method m : all_methods()) {
     const Recipe& r = spec(m).recipe;
     EXPECT_EQ(r.needs_led_weights(), r.lens_detector) << spec(m).name;
-    EXPECT_EQ(r.needs_aef_weights(), r.particle_filter && r.aef == restoration::FilterMethod::kLearned) << spec(m).name;
+    EXPECT_EQ(r.needs_aef_weights(), r.particle_filter && r.aef == restoration::aef::FilterMethod::kLearned) << spec(m).name;
   }
   EXPECT_TRUE(recipe(Method::kWeatherGS).needs_led_weights() && recipe(Method::kWeatherGS).needs_aef_weights());
   EXPECT_FALSE(recipe(Method::kAefTophat).needs_aef_weights());

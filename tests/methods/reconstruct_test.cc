@@ -10,7 +10,7 @@
 #include "core/dataset.h"
 #include "core/json_reader.h"
 #include "capture/process.h"
-#include "restoration/lens_detector.h"
+#include "restoration/led/lens_detector.h"
 #include "methods/reconstruct.h"
 #include "tests/core/test_util.h"
 #include "tests/generator/test_scene.h"
@@ -205,7 +205,7 @@ TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   EXPECT_EQ(d.at("adaptation").at("iterations"), 4);
   EXPECT_EQ(d.at("adaptation").at("layouts").size(), 1u);
   // cut by the weights' rule for adapted maps
-  EXPECT_EQ(d.at("peak_rule"), restoration::LensDetector::load(o.led_weights).adapted_peak_rule()->to_json());
+  EXPECT_EQ(d.at("peak_rule"), restoration::led::LensDetector::load(o.led_weights).adapted_peak_rule()->to_json());
   EXPECT_THROW(reconstruct(options(data, run, Method::kWeatherGSNoAef)), InputError);
   // Masks adapted or cut otherwise than this run asks for are refused too, naming what differs.
   auto refusal = [&](const ReconstructOptions& other) -> std::string {
@@ -220,7 +220,7 @@ TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   more.led_adapt->iterations = 5;
   EXPECT_NE(refusal(more).find("iterations: holds 4, asked for 5"), std::string::npos) << refusal(more);
   ReconstructOptions cut = o;
-  cut.led_mask.peak = restoration::LedPeakRule{0.4, 0.5, 0.7};
+  cut.led_mask.peak = restoration::led::LedPeakRule{0.4, 0.5, 0.7};
   EXPECT_NE(refusal(cut).find("peak_rule"), std::string::npos) << refusal(cut);
   ReconstructOptions dilated = o;
   dilated.led_mask.dilate_iterations = 1;

@@ -1,4 +1,4 @@
-// The learned AEF (restoration/aef_plugin.h), the weather selector (restoration/weather_selector.h),
+// The learned AEF (restoration/aef/aef_plugin.h), the weather selector (restoration/aef/weather_selector.h),
 // their training, and `weathergs filter --method learned`.
 #include <gtest/gtest.h>
 
@@ -12,13 +12,13 @@
 #include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/rng.h"
-#include "restoration/aef_training.h"
-#include "restoration/filter_dataset.h"
+#include "restoration/aef/aef_training.h"
+#include "restoration/aef/filter_dataset.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
 #include "tests/generator/test_scene.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 namespace {
 
 namespace fs = std::filesystem;
@@ -336,4 +336,4 @@ TEST(FilterLearnedTest, TasksOverridesReportAndBadInput) {
 }
 
 }  // namespace
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

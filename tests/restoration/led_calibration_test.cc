@@ -1,4 +1,4 @@
-// Calibrating the LED's post-processing (restoration/led_training.h): from precomputed maps, under a
+// Calibrating the LED's post-processing (restoration/led/led_training.h): from precomputed maps, under a
 // precision bound, and `weathergs calibrate-led --maps` over what `detect --save-attention` wrote.
 #include <gtest/gtest.h>
 
@@ -9,11 +9,11 @@
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/json_reader.h"
-#include "restoration/led_training.h"
+#include "restoration/led/led_training.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 namespace {
 
 namespace fs = std::filesystem;
@@ -166,4 +166,4 @@ TEST(LedCalibrationTest, TheAdaptedRuleRoundTripsAndClones) {
 }
 
 }  // namespace
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

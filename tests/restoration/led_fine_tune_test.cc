@@ -1,4 +1,4 @@
-// `weathergs train-led --init` (fine-tune given weights) and `--ignore-mask` (restoration/led_training.h):
+// `weathergs train-led --init` (fine-tune given weights) and `--ignore-mask` (restoration/led/led_training.h):
 // the training path of the LED's test-time adaptation (adaptation/led_adaptation.h).
 #include <gtest/gtest.h>
 
@@ -7,11 +7,11 @@
 #include "core/atomic_file.h"
 #include "core/dataset.h"
 #include "core/json_reader.h"
-#include "restoration/led_training.h"
+#include "restoration/led/led_training.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 namespace {
 
 namespace fs = std::filesystem;
@@ -67,4 +67,4 @@ TEST(LedFineTuneTest, TrainLedInitFineTunesAndTheIgnoreMaskLeavesPixelsOut) {
 }
 
 }  // namespace
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

@@ -9,12 +9,12 @@
 #include "core/atomic_file.h"
 #include "core/json_reader.h"
 #include "core/rng.h"
-#include "restoration/detect_dataset.h"
-#include "restoration/lens_detector.h"
+#include "restoration/led/detect_dataset.h"
+#include "restoration/led/lens_detector.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 namespace {
 
 namespace fs = std::filesystem;
@@ -180,4 +180,4 @@ TEST(LedViewPoolingTest, TrainLedAndDetectFromTheCommandLine) {
 }
 
 }  // namespace
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

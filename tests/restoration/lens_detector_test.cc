@@ -1,4 +1,4 @@
-// The learned Lens Effect Detector (restoration/lens_detector.h), its post-processing and `weathergs
+// The learned Lens Effect Detector (restoration/led/lens_detector.h), its post-processing and `weathergs
 // detect` / `weathergs train-led`.
 #include <gtest/gtest.h>
 
@@ -11,12 +11,12 @@
 #include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/rng.h"
-#include "restoration/detect_dataset.h"
-#include "restoration/led_training.h"
+#include "restoration/led/detect_dataset.h"
+#include "restoration/led/led_training.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 namespace {
 
 namespace fs = std::filesystem;
@@ -610,4 +610,4 @@ TEST(DetectDatasetTest, ScoresAgainstTheLensCoverageWhenTheDatasetHasIt) {
 }
 
 }  // namespace
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

@@ -1,4 +1,4 @@
-// The classical particle filter (restoration/particle_filter.h) and `weathergs filter`.
+// The classical particle filter (restoration/aef/particle_filter.h) and `weathergs filter`.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,12 +8,12 @@
 #include "core/dataset.h"
 #include "core/json_reader.h"
 #include "core/rng.h"
-#include "restoration/filter_dataset.h"
+#include "restoration/aef/filter_dataset.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
 #include "tests/generator/test_scene.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 namespace {
 
 namespace fs = std::filesystem;
@@ -140,4 +140,4 @@ TEST(FilterDatasetTest, EveryViewFilteredWithAReportAndNothingOnBadInput) {
 }
 
 }  // namespace
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

@@ -12,15 +12,15 @@
 
 #include "core/dataset.h"
 #include "core/rng.h"
-#include "restoration/lens_detector.h"
+#include "restoration/led/lens_detector.h"
 #include "tests/generator/test_scene.h"
 
 namespace weathergs::restoration::testing_util {
 
 // A textured view (uniform noise in [0.2, 0.5] drawn from `rng`) with a blurry bright disc of radius r
 // px at each centre (drops on the lens), and their mask.
-inline LedExample textured_view_with_drops(int w, int h, Rng rng, const std::vector<std::array<double, 2>>& centres, double r) {
-  LedExample e{Image(w, h, 3), Image(w, h, 1, ColorSpace::kLinear)};
+inline led::LedExample textured_view_with_drops(int w, int h, Rng rng, const std::vector<std::array<double, 2>>& centres, double r) {
+  led::LedExample e{Image(w, h, 3), Image(w, h, 1, ColorSpace::kLinear)};
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
       for (int c = 0; c < 3; ++c) e.image.at(x, y, c) = 0.2f + 0.3f * rng.uniform();
@@ -37,8 +37,8 @@ inline LedExample textured_view_with_drops(int w, int h, Rng rng, const std::vec
 }
 
 // A network small enough for a test to train in seconds.
-inline LedArchitecture tiny_arch() {
-  LedArchitecture a;
+inline led::LedArchitecture tiny_arch() {
+  led::LedArchitecture a;
   a.width = 32;
   a.channels = 6;
   a.steps = 2;
@@ -54,7 +54,7 @@ inline int run_cli(const std::string& args, const std::string& log) {
 
 // A clean test dataset of `views` views whose images/ carry the drops of view(width, height, index)
 // (its image inside its mask, the clean view elsewhere) and masks/lens/ their masks.
-inline void make_drop_dataset(const std::string& dir, int views, const std::function<LedExample(int, int, int)>& view) {
+inline void make_drop_dataset(const std::string& dir, int views, const std::function<led::LedExample(int, int, int)>& view) {
   namespace fs = std::filesystem;
   testing::SceneOptions so;
   so.views = views;
@@ -64,7 +64,7 @@ inline void make_drop_dataset(const std::string& dir, int views, const std::func
   const Dataset ds = read_dataset(dir);
   for (size_t i = 0; i < ds.cameras.size(); ++i) {
     const Camera& c = ds.cameras[i];
-    const LedExample e = view(c.width, c.height, int(i));
+    const led::LedExample e = view(c.width, c.height, int(i));
     Image img = read_image(ds.path(ImageKind::kClean, c.name));
     for (int y = 0; y < c.height; ++y)
       for (int x = 0; x < c.width; ++x)

@@ -10,8 +10,8 @@
 #include "core/atomic_file.h"
 #include "core/dataset.h"
 #include "evaluator/metrics.h"
-#include "restoration/detect_dataset.h"
-#include "restoration/filter_dataset.h"
+#include "restoration/aef/filter_dataset.h"
+#include "restoration/led/detect_dataset.h"
 #include "tests/core/test_util.h"
 
 namespace weathergs::restoration {
@@ -32,9 +32,9 @@ constexpr double kMinDerainGainDb = 4.0;  // measured 6.39 dB (outside the drops
 constexpr double kMinDesnowGainDb = 4.0;  // measured 5.91 dB
 constexpr double kMinLedIou = 0.55;       // measured 0.790 (precision 0.843, recall 0.927; drops cover 41%)
 
-FilterDatasetOptions learned(AefTask task) {
-  FilterDatasetOptions o;
-  o.method = FilterMethod::kLearned;
+aef::FilterDatasetOptions learned(aef::AefTask task) {
+  aef::FilterDatasetOptions o;
+  o.method = aef::FilterMethod::kLearned;
   o.task = task;
   o.aef_weights = kAefWeights;
   return o;
@@ -69,25 +69,25 @@ std::string clear_copy(const TempDir& tmp) {
 
 TEST(ShippedWeights, TheSelectorChoosesRainSnowAndNone) {
   TempDir tmp;
-  const std::vector<std::pair<std::string, WeatherClass>> cases = {
-      {kFixtures + "/station_rain", WeatherClass::kRain},
-      {kFixtures + "/station_snow", WeatherClass::kSnow},
-      {clear_copy(tmp), WeatherClass::kNone}};
+  const std::vector<std::pair<std::string, aef::WeatherClass>> cases = {
+      {kFixtures + "/station_rain", aef::WeatherClass::kRain},
+      {kFixtures + "/station_snow", aef::WeatherClass::kSnow},
+      {clear_copy(tmp), aef::WeatherClass::kNone}};
   int i = 0;
   for (const auto& [dataset, expected] : cases) {
-    const FilterDatasetReport r = filter_dataset(dataset, tmp / ("f" + std::to_string(i++)), learned(AefTask::kAuto));
+    const aef::FilterDatasetReport r = aef::filter_dataset(dataset, tmp / ("f" + std::to_string(i++)), learned(aef::AefTask::kAuto));
     ASSERT_TRUE(r.selected);
     std::printf("%s: selector chose %s (cosines rain %.3f, snow %.3f, none %.3f)\n", dataset.c_str(),
-                to_string(r.scene.choice), r.scene.cosine[size_t(WeatherClass::kRain)],
-                r.scene.cosine[size_t(WeatherClass::kSnow)], r.scene.cosine[size_t(WeatherClass::kNone)]);
+                to_string(r.scene.choice), r.scene.cosine[size_t(aef::WeatherClass::kRain)],
+                r.scene.cosine[size_t(aef::WeatherClass::kSnow)], r.scene.cosine[size_t(aef::WeatherClass::kNone)]);
     EXPECT_EQ(to_string(r.scene.choice), std::string(to_string(expected))) << dataset;
   }
 }
 
 TEST(ShippedWeights, TheAefPluginsGainOnTheirWeather) {
   TempDir tmp;
-  filter_dataset(kFixtures + "/station_rain", tmp / "derain", learned(AefTask::kDerain));
-  filter_dataset(kFixtures + "/station_snow", tmp / "desnow", learned(AefTask::kDesnow));
+  aef::filter_dataset(kFixtures + "/station_rain", tmp / "derain", learned(aef::AefTask::kDerain));
+  aef::filter_dataset(kFixtures + "/station_snow", tmp / "desnow", learned(aef::AefTask::kDesnow));
   const double derain = mean_gain_db(kFixtures + "/station_rain", tmp / "derain");
   const double desnow = mean_gain_db(kFixtures + "/station_snow", tmp / "desnow");
   std::printf("derain gains %.3f dB on station_rain, desnow %.3f dB on station_snow\n", derain, desnow);
@@ -97,9 +97,9 @@ TEST(ShippedWeights, TheAefPluginsGainOnTheirWeather) {
 
 TEST(ShippedWeights, TheLedFindsTheDropsOfARainyScene) {
   TempDir tmp;
-  DetectDatasetOptions o;
+  led::DetectDatasetOptions o;
   o.weights = kLedWeights;
-  const DetectDatasetReport r = detect_dataset(kFixtures + "/station_rain", tmp / "detected", o);
+  const led::DetectDatasetReport r = led::detect_dataset(kFixtures + "/station_rain", tmp / "detected", o);
   ASSERT_TRUE(r.ground_truth.has_value()) << "the fixture has masks/lens";
   std::printf("LED on station_rain: IoU %.3f, precision %.3f, recall %.3f (drops cover %.3f of the pixels)\n",
               r.ground_truth->iou, r.ground_truth->precision, r.ground_truth->recall, r.ground_truth->gt_fraction);

@@ -6,11 +6,11 @@
 
 #include "core/atomic_file.h"
 #include "core/json_reader.h"
-#include "restoration/aef_plugin.h"
+#include "restoration/aef/aef_plugin.h"
 #include "tests/core/test_util.h"
 #include "tests/restoration/restoration_test_util.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 namespace {
 
 namespace fs = std::filesystem;
@@ -90,4 +90,4 @@ TEST(TrainAefCli, BadInputsExitTwoAndLeaveNothing) {
 }
 
 }  // namespace
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

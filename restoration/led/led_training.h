@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "restoration/detect_dataset.h"
-#include "restoration/lens_detector.h"
+#include "restoration/led/detect_dataset.h"
+#include "restoration/led/lens_detector.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 
 // Every view of a dataset as (images/<view>.png, masks/lens/<view>.png); a dataset without masks/lens
 // has no drops: its masks are zero.
@@ -123,4 +123,4 @@ struct RecalibrateLedOptions {
 // width it had before as "width_changed_from".
 LedCalibration recalibrate_led(const std::string& weights_stem, const std::string& out_stem, const RecalibrateLedOptions& options);
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

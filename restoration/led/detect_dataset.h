@@ -1,5 +1,5 @@
 // `weathergs detect`: the learned Lens Effect Detector over the views of a dataset, turned into loss
-// masks for 3DGS (docs/restoration_led.md). libtorch-free: the network is behind restoration/lens_detector.h.
+// masks for 3DGS (docs/restoration_led.md). libtorch-free: the network is behind restoration/led/lens_detector.h.
 #pragma once
 
 #include <functional>
@@ -11,9 +11,9 @@
 #include "core/image.h"
 #include "core/json_reader.h"
 #include "core/stage_output.h"
-#include "restoration/lens_detector.h"
+#include "restoration/led/lens_detector.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 
 inline constexpr const char* kDetectReportFile = "detect.json";  // written last: the output is complete
 // With save_attention: the soft attention each mask was thresholded from, <out>/attention/<view>.png
@@ -124,4 +124,4 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
 // The mean attention of `views` (sRGB images of one size): the averaging step on its own (calibration).
 Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch = 1);
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

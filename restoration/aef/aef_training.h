@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "core/dataset.h"
-#include "restoration/aef_plugin.h"
-#include "restoration/weather_selector.h"
+#include "restoration/aef/aef_plugin.h"
+#include "restoration/aef/weather_selector.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 // A dataset's weather class from dataset.json's `weather` ("rain+fog" is rain; clear, fog only or
 // lens drops only are none). InputError when it names both rain and snow.
@@ -74,4 +74,4 @@ struct TrainSelectorResult {
 TrainSelectorResult train_selector(const std::vector<std::string>& train_datasets, const std::vector<std::string>& held_out,
                                    const std::string& out_stem, const TrainSelectorOptions& options);
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

@@ -1,4 +1,4 @@
-#include "restoration/filter_dataset.h"
+#include "restoration/aef/filter_dataset.h"
 
 #include <chrono>
 #include <filesystem>
@@ -11,9 +11,9 @@
 #include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/progress.h"
-#include "restoration/aef_plugin.h"
+#include "restoration/aef/aef_plugin.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 namespace fs = std::filesystem;
 
@@ -235,4 +235,4 @@ FilterDatasetReport filter_dataset(const std::string& dataset, const std::string
   return report;
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

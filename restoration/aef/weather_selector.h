@@ -19,7 +19,7 @@
 #include "core/image.h"
 #include "core/json_reader.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 inline constexpr const char* kSelectorFormat = "weathergs-weather-selector";
 inline constexpr int kSelectorFormatVersion = 1;
@@ -108,4 +108,4 @@ class WeatherSelector {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

@@ -17,7 +17,7 @@
 #include "core/image.h"
 #include "core/json_reader.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 
 inline constexpr const char* kLedFormat = "weathergs-led";
 inline constexpr int kLedFormatVersion = 1;
@@ -179,4 +179,4 @@ class LensDetector {
   explicit LensDetector(std::unique_ptr<Impl> impl);
 };
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

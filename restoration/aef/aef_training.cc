@@ -1,4 +1,4 @@
-#include "restoration/aef_training.h"
+#include "restoration/aef/aef_training.h"
 
 #include <cmath>
 #include <filesystem>
@@ -7,7 +7,7 @@
 #include "core/error.h"
 #include "core/json_reader.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 namespace fs = std::filesystem;
 
@@ -260,4 +260,4 @@ TrainSelectorResult train_selector(const std::vector<std::string>& train_dataset
   return result;
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

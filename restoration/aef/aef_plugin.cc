@@ -1,5 +1,5 @@
 // One of the two libtorch translation units of the learned AEF (the other is weather_selector.cc).
-#include "restoration/aef_plugin.h"
+#include "restoration/aef/aef_plugin.h"
 
 #include <torch/torch.h>
 
@@ -13,7 +13,7 @@
 #include "core/rng.h"
 #include "restoration/torch_weights.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 namespace nn = torch::nn;
 namespace F = torch::nn::functional;
@@ -351,4 +351,4 @@ AefOutput AefPlugin::restore(const Image& image, const std::string& where) const
   return r;
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

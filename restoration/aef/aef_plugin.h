@@ -25,7 +25,7 @@
 #include "core/image.h"
 #include "core/json_reader.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 inline constexpr const char* kAefFormat = "weathergs-aef";
 inline constexpr int kAefFormatVersion = 1;
@@ -116,4 +116,4 @@ class AefPlugin {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

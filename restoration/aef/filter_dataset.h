@@ -1,6 +1,6 @@
 // `weathergs filter`: the Atmospheric Effect Filter over every view of a dataset (docs/restoration.md):
-// the classical top-hat (restoration/particle_filter.h) or the learned derain/desnow plugins
-// (restoration/aef_plugin.h), with the weather selector (restoration/weather_selector.h) deciding
+// the classical top-hat (restoration/aef/particle_filter.h) or the learned derain/desnow plugins
+// (restoration/aef/aef_plugin.h), with the weather selector (restoration/aef/weather_selector.h) deciding
 // which plugin, if any, runs.
 #pragma once
 
@@ -10,10 +10,10 @@
 
 #include "core/dataset_layout.h"
 #include "core/stage_output.h"
-#include "restoration/particle_filter.h"
-#include "restoration/weather_selector.h"
+#include "restoration/aef/particle_filter.h"
+#include "restoration/aef/weather_selector.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 // restore: <out>/<view>.png are the filtered images (train 3DGS on them: train --images-dir) and
 //          <out>/masks/<view>.png the particle masks; mask: <out>/<view>.png are the particle masks
@@ -92,4 +92,4 @@ StageOutput filter_output(const std::string& out, const FilterDatasetOptions& op
 // before anything is written; InputError names the dataset, view, file or option.
 FilterDatasetReport filter_dataset(const std::string& dataset, const std::string& out, const FilterDatasetOptions& options);
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

@@ -1,5 +1,5 @@
 // The only translation unit of the LED that includes libtorch (~17 s to compile).
-#include "restoration/lens_detector.h"
+#include "restoration/led/lens_detector.h"
 
 #include <torch/torch.h>
 
@@ -20,7 +20,7 @@
 #include "core/sha256.h"
 #include "restoration/torch_weights.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 
 namespace fs = std::filesystem;
 namespace nn = torch::nn;
@@ -596,4 +596,4 @@ double LensDetector::loss(const std::vector<LedExample>& examples, double theta)
   return attention_loss(impl_->net->forward(torch::stack(bx)), torch::stack(bm), theta).item<double>();
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

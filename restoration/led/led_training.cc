@@ -1,4 +1,4 @@
-#include "restoration/led_training.h"
+#include "restoration/led/led_training.h"
 
 #include <cmath>
 #include <cstdio>
@@ -9,7 +9,7 @@
 #include "core/error.h"
 #include "core/json_reader.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 
 namespace fs = std::filesystem;
 
@@ -375,4 +375,4 @@ TrainLedResult train_led(const std::vector<std::string>& train_datasets, const s
   return result;
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

@@ -1,4 +1,4 @@
-#include "restoration/detect_dataset.h"
+#include "restoration/led/detect_dataset.h"
 
 #include <chrono>
 #include <cstring>
@@ -13,7 +13,7 @@
 #include "core/parallel.h"
 #include "core/progress.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::led {
 
 namespace fs = std::filesystem;
 
@@ -337,4 +337,4 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   return report;
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::led

@@ -1,4 +1,4 @@
-#include "restoration/particle_filter.h"
+#include "restoration/aef/particle_filter.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include "core/error.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 void ParticleFilterOptions::validate() const {
   if (!(radius_px_at_300 > 0 && radius_px_at_300 <= 64))
@@ -71,4 +71,4 @@ ParticleFilterResult filter_particles(const Image& image, const ParticleFilterOp
   return out;
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

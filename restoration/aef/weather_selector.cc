@@ -1,5 +1,5 @@
-// The libtorch translation unit of the weather selector (restoration/weather_selector.h).
-#include "restoration/weather_selector.h"
+// The libtorch translation unit of the weather selector (restoration/aef/weather_selector.h).
+#include "restoration/aef/weather_selector.h"
 
 #include <torch/torch.h>
 
@@ -15,7 +15,7 @@
 #include "core/rng.h"
 #include "restoration/torch_weights.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 namespace nn = torch::nn;
 namespace F = torch::nn::functional;
@@ -309,4 +309,4 @@ std::vector<float> WeatherSelector::mean_embedding(const std::vector<std::vector
   return out;
 }
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef

@@ -13,7 +13,7 @@
 
 #include "core/image.h"
 
-namespace weathergs::restoration {
+namespace weathergs::restoration::aef {
 
 struct ParticleFilterOptions {
   // Disk radius in pixels at a 300 px wide view; scaled with the width (particles are drawn at a fixed
@@ -35,4 +35,4 @@ struct ParticleFilterResult {
 // `image`: sRGB, 3 or 4 channels (alpha ignored). `where` names the image in errors.
 ParticleFilterResult filter_particles(const Image& image, const ParticleFilterOptions& options, const std::string& where);
 
-}  // namespace weathergs::restoration
+}  // namespace weathergs::restoration::aef
