@@ -16,4 +16,11 @@ std::vector<int> snapshot_iterations(const std::vector<RunFraction>& snapshots, 
   return out;
 }
 
+std::vector<int> scored_snapshots(const std::vector<RunFraction>& snapshots, int iterations) {
+  std::vector<int> its = snapshot_iterations(snapshots, iterations);
+  std::sort(its.begin(), its.end());
+  its.erase(std::unique(its.begin(), its.end()), its.end());
+  return its;
+}
+
 }  // namespace weathergs::methods

@@ -64,6 +64,8 @@ struct BackendRun {
 // The snapshots' iterations in a run of `iterations`, in the order given (duplicates kept: a backend
 // trainer accepts them) without those at or past the end.
 std::vector<int> snapshot_iterations(const std::vector<RunFraction>& snapshots, int iterations);
+// The same, sorted and unique: the iterations the curve scores.
+std::vector<int> scored_snapshots(const std::vector<RunFraction>& snapshots, int iterations);
 
 // 3DGS with the trainer's options as the method's recipe made them, checkpointing every
 // `checkpoint_every` iterations (0: only at the end).

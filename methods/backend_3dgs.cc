@@ -1,5 +1,4 @@
 // The 3DGS backend: reconstruction/'s training run, its checkpoints and its renders.
-#include <algorithm>
 #include <filesystem>
 
 #include "methods/backend.h"
@@ -17,12 +16,7 @@ class GaussianBackend final : public Backend {
 
   int iterations() const override { return train_.iterations; }
 
-  std::vector<int> snapshots() const override {
-    std::vector<int> its = snapshot_iterations(run_.snapshots, iterations());
-    std::sort(its.begin(), its.end());
-    its.erase(std::unique(its.begin(), its.end()), its.end());
-    return its;
-  }
+  std::vector<int> snapshots() const override { return scored_snapshots(run_.snapshots, iterations()); }
 
   StageOutput model_output() const override { return reconstruction::run_output(run_.model_dir, train_); }
 

@@ -1,6 +1,4 @@
 // The radiance-field backend: nerf/'s training run, which keeps its snapshots' renders itself.
-#include <algorithm>
-
 #include "methods/backend.h"
 
 namespace weathergs::methods {
@@ -13,12 +11,7 @@ class FieldBackend final : public Backend {
 
   int iterations() const override { return nerf_.iterations; }
 
-  std::vector<int> snapshots() const override {
-    std::vector<int> its = snapshot_iterations(run_.snapshots, iterations());
-    std::sort(its.begin(), its.end());
-    its.erase(std::unique(its.begin(), its.end()), its.end());
-    return its;
-  }
+  std::vector<int> snapshots() const override { return scored_snapshots(run_.snapshots, iterations()); }
 
   StageOutput model_output() const override { return nerf::nerf_run_output(run_.model_dir, iterations()); }
 

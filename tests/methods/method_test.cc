@@ -51,6 +51,7 @@ TEST(MethodTest, SnapshotFractionsResolvePerBackendLength) {
   EXPECT_EQ(snapshot_iterations(f, 1000), (std::vector<int>{500, 250, 500, 1}));
   EXPECT_EQ(snapshot_iterations(f, 80), (std::vector<int>{40, 20, 40, 1}));  // never iteration 0
   EXPECT_EQ(snapshot_iterations({{999, 1000}}, 10), std::vector<int>{});     // at the end: the final point
+  EXPECT_EQ(scored_snapshots(f, 80), (std::vector<int>{1, 20, 40}));
 }
 
 }  // namespace
