@@ -1,6 +1,6 @@
-// Internal to restoration/: the weights file pair of the learned networks (`<stem>.json` manifest +
-// `<stem>.bin` float32 blob) and the two training helpers they share: the LED, the AEF plugins and
-// the weather selector. Includes libtorch, so
+// Internal to restoration/: the scaffold the learned networks share (the LED, the AEF plugins and the
+// weather selector): their residual block, the state behind their torch-free classes, the weights
+// file pair (`<stem>.json` manifest + `<stem>.bin` float32 blob) and two training helpers. Includes libtorch, so
 // only the libtorch translation units (lens_detector.cc, aef_plugin.cc, weather_selector.cc) include it.
 #pragma once
 
@@ -101,6 +101,44 @@ inline void load_weights(torch::nn::Module& module, const JsonReader& r, const s
     offset += bytes;
   }
   if (offset != blob.size()) throw InputError(bin_path, std::string("longer than its tensor table") + kWeightsFix);
+}
+
+// Two dilated 3x3 convolutions with a skip: the body of the LED and of the AEF plugins.
+struct ResidualBlockImpl : torch::nn::Module {
+  torch::nn::Conv2d c1{nullptr}, c2{nullptr};
+  ResidualBlockImpl(int ch, int dilation) {
+    using torch::nn::Conv2d, torch::nn::Conv2dOptions;
+    c1 = register_module("c1", Conv2d(Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
+    c2 = register_module("c2", Conv2d(Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
+  }
+  torch::Tensor forward(const torch::Tensor& x) { return torch::relu(x + c2(torch::relu(c1(x)))); }
+};
+TORCH_MODULE(ResidualBlock);
+
+// What every learned network keeps behind its torch-free class: its architecture, its module and the
+// manifest it was loaded with. A network's own settings (a threshold, a plugin kind) sit beside it.
+template <typename Arch, typename Net>
+struct NetworkState {
+  Arch arch;
+  Net net{nullptr};
+  Json metadata = Json::object();
+};
+
+// The one save envelope: `extra` (when an object) with the format, version, architecture and
+// parameter count, then the network's own `fields` (a null field removes that key), then the weights.
+template <typename Arch, typename Net>
+void save_network(const NetworkState<Arch, Net>& s, const std::string& stem, const Json& extra, const char* format,
+                  int version, const Json& fields) {
+  Json j = extra.is_object() ? extra : Json::object();
+  j["format"] = format;
+  j["version"] = version;
+  j["architecture"] = s.arch.to_json();
+  for (const auto& [key, value] : fields.items()) {
+    if (value.is_null()) j.erase(key);
+    else j[key] = value;
+  }
+  j["parameters"] = parameter_count(*s.net);
+  save_weights(*s.net, stem, j);  // + the tensor table, the blob and its sha256
 }
 
 }  // namespace weathergs::restoration::detail

@@ -23,15 +23,7 @@ namespace {
 constexpr uint64_t kStreamAefBatch = 0x4145464241544348ull;  // "AEFBATCH": examples, crops, flips
 constexpr int kInputChannels = 7;                             // RGB, opening(RGB), top-hat(luminance)
 
-struct AefResidualBlockImpl : nn::Module {
-  nn::Conv2d c1{nullptr}, c2{nullptr};
-  AefResidualBlockImpl(int ch, int dilation) {
-    c1 = register_module("c1", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
-    c2 = register_module("c2", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
-  }
-  torch::Tensor forward(const torch::Tensor& x) { return torch::relu(x + c2(torch::relu(c1(x)))); }
-};
-TORCH_MODULE(AefResidualBlock);
+using detail::ResidualBlock;
 
 torch::Tensor upsample_to(const torch::Tensor& x, const torch::Tensor& like) {
   return F::interpolate(x, F::InterpolateFuncOptions()
@@ -51,7 +43,7 @@ struct AefNetImpl : nn::Module {
     e1 = register_module("e1", nn::Conv2d(nn::Conv2dOptions(c0, c1, 3).padding(1).stride(2)));
     e2 = register_module("e2", nn::Conv2d(nn::Conv2dOptions(c1, c2, 3).padding(1).stride(2)));
     blocks = register_module("blocks", nn::ModuleList());
-    for (int b = 0; b < a.residual_blocks; ++b) blocks->push_back(AefResidualBlock(c2, 1 << b));
+    for (int b = 0; b < a.residual_blocks; ++b) blocks->push_back(ResidualBlock(c2, 1 << b));
     d1 = register_module("d1", nn::Conv2d(nn::Conv2dOptions(c2 + c1, c1, 3).padding(1)));
     d0 = register_module("d0", nn::Conv2d(nn::Conv2dOptions(c1 + c0, c0, 3).padding(1)));
     head = register_module("head", nn::Conv2d(nn::Conv2dOptions(c0, 4, 1)));
@@ -65,7 +57,7 @@ struct AefNetImpl : nn::Module {
     const torch::Tensor f0 = torch::relu(e0(x));
     const torch::Tensor f1 = torch::relu(e1(f0));
     torch::Tensor f = torch::relu(e2(f1));
-    for (const auto& b : *blocks) f = b->as<AefResidualBlock>()->forward(f);
+    for (const auto& b : *blocks) f = b->as<ResidualBlock>()->forward(f);
     torch::Tensor u = torch::relu(d1(torch::cat({upsample_to(f, f1), f1}, 1)));
     u = torch::relu(d0(torch::cat({upsample_to(u, f0), f0}, 1)));
     return head(u);
@@ -209,11 +201,8 @@ void AefTrainOptions::validate() const {
   if (threads < 0) throw InputError("AEF training threads", "expected >= 0, got " + std::to_string(threads));
 }
 
-struct AefPlugin::Impl {
+struct AefPlugin::Impl : detail::NetworkState<AefArchitecture, AefNet> {
   AefPluginKind kind = AefPluginKind::kDerain;
-  AefArchitecture arch;
-  AefNet net{nullptr};
-  Json metadata = Json::object();
 };
 
 AefPlugin::~AefPlugin() = default;
@@ -238,13 +227,7 @@ int64_t AefPlugin::parameter_count() const {
 }
 
 void AefPlugin::save(const std::string& stem, const Json& extra) const {
-  Json j = extra.is_object() ? extra : Json::object();
-  j["format"] = kAefFormat;
-  j["version"] = kAefFormatVersion;
-  j["plugin"] = to_string(impl_->kind);
-  j["architecture"] = impl_->arch.to_json();
-  j["parameters"] = parameter_count();
-  detail::save_weights(*impl_->net, stem, j);
+  detail::save_network(*impl_, stem, extra, kAefFormat, kAefFormatVersion, {{"plugin", to_string(impl_->kind)}});
 }
 
 AefPlugin AefPlugin::load(const std::string& stem, AefPluginKind expected) {

@@ -155,11 +155,8 @@ void SelectorTrainOptions::validate() const {
   if (threads < 0) throw InputError("selector training threads", "expected >= 0, got " + std::to_string(threads));
 }
 
-struct WeatherSelector::Impl {
-  SelectorArchitecture arch;
-  SelectorNet net{nullptr};
+struct WeatherSelector::Impl : detail::NetworkState<SelectorArchitecture, SelectorNet> {
   double theta = 0.5;
-  Json metadata = Json::object();
 };
 
 WeatherSelector::~WeatherSelector() = default;
@@ -187,15 +184,11 @@ int64_t WeatherSelector::parameter_count() const {
 }
 
 void WeatherSelector::save(const std::string& stem, const Json& extra) const {
-  Json j = extra.is_object() ? extra : Json::object();
-  j["format"] = kSelectorFormat;
-  j["version"] = kSelectorFormatVersion;
-  j["architecture"] = impl_->arch.to_json();
-  j["theta"] = impl_->theta;
-  j["prototypes"] = {to_string(WeatherClass::kSnow), to_string(WeatherClass::kRain), to_string(WeatherClass::kNone)};
-  j["instructions"] = {kInstructionDesnow, kInstructionDerain, kInstructionNone};
-  j["parameters"] = parameter_count();
-  detail::save_weights(*impl_->net, stem, j);
+  detail::save_network(
+      *impl_, stem, extra, kSelectorFormat, kSelectorFormatVersion,
+      {{"theta", impl_->theta},
+       {"prototypes", {to_string(WeatherClass::kSnow), to_string(WeatherClass::kRain), to_string(WeatherClass::kNone)}},
+       {"instructions", {kInstructionDesnow, kInstructionDerain, kInstructionNone}}});
 }
 
 WeatherSelector WeatherSelector::load(const std::string& stem) {

@@ -30,15 +30,7 @@ namespace {
 
 constexpr uint64_t kStreamLedBatch = 0x4c4544424154ull;  // "LEDBAT": which examples, flips
 
-struct ResidualBlockImpl : nn::Module {
-  nn::Conv2d c1{nullptr}, c2{nullptr};
-  ResidualBlockImpl(int ch, int dilation) {
-    c1 = register_module("c1", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
-    c2 = register_module("c2", nn::Conv2d(nn::Conv2dOptions(ch, ch, 3).padding(dilation).dilation(dilation)));
-  }
-  torch::Tensor forward(const torch::Tensor& x) { return torch::relu(x + c2(torch::relu(c1(x)))); }
-};
-TORCH_MODULE(ResidualBlock);
+using detail::ResidualBlock;
 
 constexpr int kInputChannels = 4;  // RGB + sharpness (to_tensor)
 
@@ -297,14 +289,11 @@ LedPeakRule LedPeakRule::from_json(const JsonReader& r) {
   return p;
 }
 
-struct LensDetector::Impl {
-  LedArchitecture arch;
-  LedNet net{nullptr};
+struct LensDetector::Impl : detail::NetworkState<LedArchitecture, LedNet> {
   double threshold = 0.5;
   int dilate_iterations = kReleasedCodeDilations;
   std::optional<LedPeakRule> peak_rule;
   std::optional<LedPeakRule> adapted_peak_rule;
-  Json metadata = Json::object();
 };
 
 LensDetector::LensDetector(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -373,18 +362,11 @@ int64_t LensDetector::parameter_count() const {
 }
 
 void LensDetector::save(const std::string& stem, const Json& extra) const {
-  Json j = extra.is_object() ? extra : Json::object();
-  j["format"] = kLedFormat;
-  j["version"] = kLedFormatVersion;
-  j["architecture"] = impl_->arch.to_json();
-  j["threshold"] = impl_->threshold;
-  j["dilate_iterations"] = impl_->dilate_iterations;
-  if (impl_->peak_rule) j["peak_rule"] = impl_->peak_rule->to_json();
-  else j.erase("peak_rule");
-  if (impl_->adapted_peak_rule) j["adapted_peak_rule"] = impl_->adapted_peak_rule->to_json();
-  else j.erase("adapted_peak_rule");
-  j["parameters"] = parameter_count();
-  detail::save_weights(*impl_->net, stem, j);  // + the tensor table, the blob and its sha256
+  detail::save_network(*impl_, stem, extra, kLedFormat, kLedFormatVersion,
+                       {{"threshold", impl_->threshold},
+                        {"dilate_iterations", impl_->dilate_iterations},
+                        {"peak_rule", impl_->peak_rule ? impl_->peak_rule->to_json() : Json()},
+                        {"adapted_peak_rule", impl_->adapted_peak_rule ? impl_->adapted_peak_rule->to_json() : Json()}});
 }
 
 LensDetector LensDetector::load(const std::string& stem) {
