@@ -19,7 +19,7 @@ struct TrainFlags {
   void add_to(CLI::App* app, reconstruction::TrainOptions& train, int& checkpoint_every) {
     app->add_option("--iterations", train.iterations, "3DGS training iterations")
         ->capture_default_str()->check(CLI::PositiveNumber);
-    app->add_option("--seed", train.seed, "Random seed (view order, random initialization, the radiance field's too)")
+    app->add_option("--seed", train.seed, "Random seed (view order, random initialization; reconstruct: the radiance field's too)")
         ->capture_default_str();
     app->add_option("--background", background, "Background colour R G B in [0, 1] (default 0 0 0)")->expected(3);
     app->add_option("--max-gaussians", train.max_gaussians,

@@ -29,7 +29,7 @@ constexpr const char* kDetectedDir = "detected";
 struct Run {
   const ReconstructOptions& o;
   const MethodSpec& method;
-  const Dataset ds;
+  const Dataset& ds;
   const fs::path dir;
   const StageCallback& on_stage;
   void stage(const std::string& s) const {
