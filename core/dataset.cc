@@ -5,6 +5,7 @@
 #include <set>
 
 #include "core/atomic_file.h"
+#include "core/json_fields.h"
 
 namespace weathergs {
 
@@ -101,44 +102,44 @@ Eigen::Matrix4d read_matrix4(const JsonReader& r) {
 }
 }  // namespace
 
+namespace {
+// One view of cameras.json (DATASET_FORMAT.md): the intrinsics and pose are required, the shutter
+// defaults to an instant at 0, and the lens keys are written only when known.
+constexpr auto kCameraFields = [](auto& c, auto& f) {
+  f("name", c.name);
+  f("width", c.width);
+  f("height", c.height);
+  f("fx", c.fx);
+  f("fy", c.fy);
+  f("cx", c.cx);
+  f("cy", c.cy);
+  f.custom(
+      "camera_from_world",
+      [&] {
+        Json m = Json::array();
+        for (int i = 0; i < 4; ++i) m.push_back({c.camera_from_world(i, 0), c.camera_from_world(i, 1),
+                                                 c.camera_from_world(i, 2), c.camera_from_world(i, 3)});
+        return m;
+      },
+      [&](const JsonReader& r, const std::string& k) { c.camera_from_world = read_matrix4(r.child(k)); });
+  f("time_s", c.time_s, json_fields::Optional{});
+  f("exposure_s", c.exposure_s, json_fields::Optional{});
+  f("f_number", c.f_number);
+  f("focal_length_mm", c.focal_length_mm);
+  f("focus_distance_m", c.focus_distance_m);
+};
+}  // namespace
+
 Camera camera_from_json(const JsonReader& r) {
   if (!r.is_object()) throw InputError(r.where(), "expected a camera object");
-  Camera c;
-  c.name = r.get<std::string>("name");
+  const Camera c = json_fields::read(r, Camera{}, kCameraFields, json_fields::Absent::kError);
   if (!is_safe_view_name(c.name))
     throw InputError(r.where("name"), "view name '" + c.name + "' is not file-system safe ([A-Za-z0-9._-])");
-  c.width = r.get<int>("width");
-  c.height = r.get<int>("height");
-  c.fx = r.get<double>("fx");
-  c.fy = r.get<double>("fy");
-  c.cx = r.get<double>("cx");
-  c.cy = r.get<double>("cy");
-  c.camera_from_world = read_matrix4(r.child("camera_from_world"));
-  c.time_s = r.get_or<double>("time_s", 0.0);
-  c.exposure_s = r.get_or<double>("exposure_s", 0.0);
-  c.f_number = r.get_optional<double>("f_number");
-  c.focal_length_mm = r.get_optional<double>("focal_length_mm");
-  c.focus_distance_m = r.get_optional<double>("focus_distance_m");
-  r.finish();
   validate_camera(c, r.where());
   return c;
 }
 
-Json camera_to_json(const Camera& c) {
-  Json m = Json::array();
-  for (int i = 0; i < 4; ++i) {
-    Json row = Json::array();
-    for (int j = 0; j < 4; ++j) row.push_back(c.camera_from_world(i, j));
-    m.push_back(row);
-  }
-  Json j = {{"name", c.name}, {"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy},
-            {"cx", c.cx},     {"cy", c.cy},       {"camera_from_world", m},
-            {"time_s", c.time_s}, {"exposure_s", c.exposure_s}};
-  if (c.f_number) j["f_number"] = *c.f_number;
-  if (c.focal_length_mm) j["focal_length_mm"] = *c.focal_length_mm;
-  if (c.focus_distance_m) j["focus_distance_m"] = *c.focus_distance_m;
-  return j;
-}
+Json camera_to_json(const Camera& c) { return json_fields::write(c, kCameraFields); }
 
 std::vector<Camera> read_cameras_json(const std::string& path) {
   JsonReader root = JsonReader::from_file(path);
@@ -157,6 +158,43 @@ std::vector<Camera> read_cameras_json(const std::string& path) {
   return cams;
 }
 
+namespace {
+// dataset.json after its format header (DATASET_FORMAT.md). generator/ and imported footage own what
+// their blocks hold; here they pass through whole.
+constexpr auto kDatasetFields = [](auto& d, auto& f) {
+  f("name", d.name);
+  f("scene", d.scene, json_fields::WhenAbsent{std::string()});
+  f("weather", d.weather, json_fields::WhenAbsent{std::string("clear")});
+  f.custom(
+      "splits", [&] { return Json(d.splits); },
+      [&](const JsonReader& r, const std::string& k) {
+        const JsonReader splits = r.child(k);
+        if (!splits.is_object()) throw InputError(splits.where(), "expected an object of named view lists");
+        for (const std::string& key : splits.keys()) {
+          const JsonReader list = splits.child(key);
+          if (!list.is_array()) throw InputError(list.where(), "expected an array of view names");
+          std::vector<std::string>& views = d.splits[key];
+          for (size_t i = 0; i < list.size(); ++i) views.push_back(list.at(i).template as<std::string>());
+        }
+      });
+  f("splits_rule", d.splits_rule);
+  f.custom(
+      "generator", [&] { return d.generator ? *d.generator : Json(Json::value_t::discarded); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (!r.has(k)) return r.mark(k);
+        const JsonReader g = r.child(k);
+        if (!g.is_object()) throw InputError(g.where(), "expected an object");
+        d.generator = g.value();
+      });
+  f.custom(
+      "source", [&] { return d.source ? *d.source : Json(Json::value_t::discarded); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (!r.has(k)) return r.mark(k);
+        d.source = r.child(k).value();
+      });
+};
+}  // namespace
+
 DatasetInfo read_dataset_json(const std::string& path) {
   JsonReader r = JsonReader::from_file(path);
   if (!r.is_object()) throw InputError(r.where(), "expected an object");
@@ -165,35 +203,13 @@ DatasetInfo read_dataset_json(const std::string& path) {
     throw InputError(r.where("format"), "expected \"weathergs-dataset\", got \"" + format + "\"");
   const int version = r.get<int>("version");
   if (version != 1) throw InputError(r.where("version"), "unsupported version " + std::to_string(version) + " (expected 1)");
-  DatasetInfo info;
-  info.name = r.get<std::string>("name");
-  info.scene = r.get_or<std::string>("scene", "");
-  info.weather = r.get_or<std::string>("weather", "clear");
-  JsonReader splits = r.child("splits");
-  if (!splits.is_object()) throw InputError(splits.where(), "expected an object of named view lists");
-  for (const std::string& key : splits.keys()) {
-    JsonReader list = splits.child(key);
-    if (!list.is_array()) throw InputError(list.where(), "expected an array of view names");
-    std::vector<std::string>& views = info.splits[key];
-    for (size_t i = 0; i < list.size(); ++i) views.push_back(list.at(i).as<std::string>());
-  }
-  info.splits_rule = r.get_optional<std::string>("splits_rule");
-  if (r.has("generator")) {
-    JsonReader g = r.child("generator");
-    if (!g.is_object()) throw InputError(g.where(), "expected an object");
-    info.generator = g.value();
-  }
-  if (r.has("source")) info.source = r.child("source").value();
-  r.finish();
-  return info;
+  return json_fields::read(r, DatasetInfo{}, kDatasetFields, json_fields::Absent::kError);
 }
 
 Json dataset_info_to_json(const DatasetInfo& info) {
-  Json j = {{"format", "weathergs-dataset"}, {"version", 1}, {"name", info.name},
-            {"scene", info.scene}, {"weather", info.weather}, {"splits", info.splits}};
-  if (info.splits_rule) j["splits_rule"] = *info.splits_rule;
-  if (info.generator) j["generator"] = *info.generator;
-  if (info.source) j["source"] = *info.source;
+  Json j = json_fields::write(info, kDatasetFields);
+  j["format"] = "weathergs-dataset";
+  j["version"] = 1;
   return j;
 }
 

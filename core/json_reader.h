@@ -82,7 +82,11 @@ class JsonReader {
                                      double lo = -kHuge, double hi = kHuge) const;
   // An enum spelled as a string: one of to_string(v) for v in `values`.
   template <typename E>
-  E get_enum(const std::string& key, std::initializer_list<E> values) const;
+  E get_enum(const std::string& key, std::initializer_list<E> values) const {
+    return get_enum(key, std::vector<E>(values));
+  }
+  template <typename E>
+  E get_enum(const std::string& key, const std::vector<E>& values) const;
   template <typename E>
   E get_enum_or(const std::string& key, E fallback, std::initializer_list<E> values) const {
     return has(key) && !(*value_)[key].is_null() ? get_enum<E>(key, values) : (mark(key), fallback);
@@ -129,7 +133,7 @@ std::array<double, N> JsonReader::get_array(const std::string& key, double lo, d
 }
 
 template <typename E>
-E JsonReader::get_enum(const std::string& key, std::initializer_list<E> values) const {
+E JsonReader::get_enum(const std::string& key, const std::vector<E>& values) const {
   const std::string s = get<std::string>(key);
   std::string allowed;
   for (E v : values) {

@@ -9,6 +9,7 @@
 
 #include "core/camera.h"
 #include "core/dataset.h"
+#include "core/json_fields.h"
 
 namespace weathergs {
 
@@ -37,6 +38,15 @@ struct TrainInputs {
            points_dir == o.points_dir;
   }
   std::string to_string() const;
+};
+
+// TrainInputs' keys in a run record (run.json of both backends): an empty folder is written as null.
+inline constexpr auto kTrainInputsFields = [](auto& s, auto& f) {
+  f("images", s.images, json_fields::OneOf{TrainImages::kImages, TrainImages::kClean});
+  f("images_dir", s.images_dir, json_fields::EmptyIsNull{});
+  f("masks", s.masks, json_fields::OneOf{TrainMasks::kNone, TrainMasks::kLens, TrainMasks::kParticles, TrainMasks::kAll});
+  f("masks_dir", s.masks_dir, json_fields::EmptyIsNull{});
+  f("points_dir", s.points_dir, json_fields::EmptyIsNull{});
 };
 
 // One training image: camera, sRGB pixels in [0, 1] (H x W x 3) and an optional mask (H x W,

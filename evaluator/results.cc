@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "core/atomic_file.h"
+#include "core/json_fields.h"
 
 namespace weathergs::evaluator {
 
@@ -30,50 +31,56 @@ MetricValues mean_metrics(const std::vector<std::pair<std::string, MetricValues>
   return m;
 }
 
-Json metrics_to_json(const MetricValues& m) {
-  Json j;
-  if (std::isinf(m.psnr)) {
-    j["psnr"] = nullptr;
-    j["psnr_infinite"] = true;
-  } else {
-    j["psnr"] = m.psnr;
-  }
-  j["ssim"] = m.ssim;
-  j["lpips"] = m.lpips ? Json(*m.lpips) : Json(nullptr);
-  return j;
-}
+namespace {
+// The scoring protocol a results.json records (DATASET_FORMAT.md). The optional entries may be absent or
+// null; lpips and mask are written as null when unset, as the format has always had them.
+constexpr auto kProtocolFields = [](auto& s, auto& f) {
+  f("ssim", s.ssim);
+  f("lpips", s.lpips, json_fields::WriteNull{});
+  f("quantize_uint8", s.quantize_uint8);
+  f("split", s.split);
+  f("mask", s.mask, json_fields::WriteNull{});
+  f("ground_truth", s.ground_truth);
+  f("lpips_mask", s.lpips_mask);
+};
+}  // namespace
 
 namespace {
+// A perfect score's PSNR is infinite, which JSON cannot hold: it is written as null with
+// "psnr_infinite": true (listed first, so that reading psnr knows).
+constexpr auto kMetricFields = [](auto& m, auto& f) {
+  f.custom(
+      "psnr_infinite", [&] { return std::isinf(m.psnr) ? Json(true) : Json(Json::value_t::discarded); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (r.get_or<bool>(k, false)) m.psnr = std::numeric_limits<double>::infinity();
+      });
+  f.custom(
+      "psnr", [&] { return std::isinf(m.psnr) ? Json(nullptr) : Json(m.psnr); },
+      [&](const JsonReader& r, const std::string& k) {
+        const std::optional<double> psnr = r.get_optional<double>(k);
+        if (std::isinf(m.psnr)) {
+          if (psnr) throw InputError(r.where(k), "must be null when psnr_infinite is true");
+        } else {
+          if (!psnr) throw InputError(r.where(k), "expected a number (or null with psnr_infinite: true)");
+          m.psnr = *psnr;
+        }
+      });
+  f("ssim", m.ssim);
+  f("lpips", m.lpips, json_fields::WriteNull{});
+};
 
 MetricValues metrics_from_json(const JsonReader& r) {
   if (!r.is_object()) throw InputError(r.where(), "expected an object with psnr, ssim, lpips");
-  MetricValues m;
-  const bool infinite = r.get_or<bool>("psnr_infinite", false);
-  auto psnr = r.get_optional<double>("psnr");
-  if (infinite) {
-    if (psnr) throw InputError(r.where("psnr"), "must be null when psnr_infinite is true");
-    m.psnr = std::numeric_limits<double>::infinity();
-  } else {
-    if (!psnr) throw InputError(r.where("psnr"), "expected a number (or null with psnr_infinite: true)");
-    m.psnr = *psnr;
-  }
-  m.ssim = r.get<double>("ssim");
-  m.lpips = r.get_optional<double>("lpips");
-  r.finish();
-  return m;
+  return json_fields::read(r, MetricValues{}, kMetricFields, json_fields::Absent::kError);
 }
 }  // namespace
+
+Json metrics_to_json(const MetricValues& m) { return json_fields::write(m, kMetricFields); }
 
 Json results_to_json(const Results& r) {
   Json per_view = Json::object();
   for (const auto& [view, v] : r.per_view) per_view[view] = metrics_to_json(v);
-  Json protocol = {{"ssim", r.protocol.ssim},
-                   {"lpips", r.protocol.lpips ? Json(*r.protocol.lpips) : Json(nullptr)},
-                   {"quantize_uint8", r.protocol.quantize_uint8},
-                   {"split", r.protocol.split},
-                   {"mask", r.protocol.mask ? Json(*r.protocol.mask) : Json(nullptr)}};
-  if (r.protocol.ground_truth) protocol["ground_truth"] = *r.protocol.ground_truth;
-  if (r.protocol.lpips_mask) protocol["lpips_mask"] = *r.protocol.lpips_mask;
+  const Json protocol = json_fields::write(r.protocol, kProtocolFields);
   Json j = {{"format", "weathergs-results"}, {"version", 1}, {"method", r.method}, {"dataset", r.dataset},
             {"scene", r.scene}, {"weather", r.weather}, {"protocol", protocol},
             {"metrics", metrics_to_json(r.metrics)}, {"per_view", per_view},
@@ -95,17 +102,10 @@ Results results_from_json(const JsonReader& r) {
   out.scene = r.get_or<std::string>("scene", "");
   out.weather = r.get_or<std::string>("weather", "");
   JsonReader p = r.child("protocol");
-  out.protocol.ssim = p.get<std::string>("ssim");
-  out.protocol.lpips = p.get_optional<std::string>("lpips");
-  out.protocol.quantize_uint8 = p.get<bool>("quantize_uint8");
-  out.protocol.split = p.get<std::string>("split");
-  out.protocol.mask = p.get_optional<std::string>("mask");
-  out.protocol.ground_truth = p.get_optional<std::string>("ground_truth");
-  out.protocol.lpips_mask = p.get_optional<std::string>("lpips_mask");
+  out.protocol = json_fields::read(p, Protocol{}, kProtocolFields, json_fields::Absent::kError);
   if (out.protocol.lpips_mask && *out.protocol.lpips_mask != kLpipsTruthFilled)
     throw InputError(p.where("lpips_mask"), "expected \"" + std::string(kLpipsTruthFilled) + "\", got \"" +
                                                 *out.protocol.lpips_mask + "\"");
-  p.finish();
   out.metrics = metrics_from_json(r.child("metrics"));
   if (r.has("per_view")) {
     JsonReader pv = r.child("per_view");

@@ -6,6 +6,7 @@
 
 #include "core/constants.h"
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "core/rng.h"
 #include "generator/stages.h"
 
@@ -97,38 +98,33 @@ void OverlayOptions::validate(const std::string& where) const {
   if (!(blur_sigma_px >= 0 && blur_sigma_px <= 20)) bad("blur_sigma_px must be in [0, 20]");
 }
 
+namespace {
+// A missing key keeps the species' default; rain and snow have keys of their own.
+constexpr auto kOverlayFields = [](auto& s, auto& f) {
+  using json_fields::Bounds;
+  f("count_per_mpx", s.count_per_mpx, Bounds{0, 1e6});
+  if (s.species == Species::kRain) {
+    f("length_px", s.length_px, json_fields::Range{}, Bounds{1e-3, 2000});
+    f("width_px", s.width_px, Bounds{1e-3, 50});
+    f("angle_deg", s.angle_deg, Bounds{-80, 80});
+    f("angle_jitter_deg", s.angle_jitter_deg, Bounds{0, 45});
+  } else {
+    f("radius_px", s.radius_px, json_fields::Range{}, Bounds{1e-3, 200});
+  }
+  f("opacity", s.opacity, json_fields::Range{}, Bounds{0, 1});
+  f("brightness", s.brightness, Bounds{0, 100});
+  f("blur_sigma_px", s.blur_sigma_px, Bounds{0, 20});
+};
+}  // namespace
+
 OverlayOptions OverlayOptions::from_json(const JsonReader& r, OverlayOptions o) {
   if (!r.is_object()) throw InputError(r.where(), "expected an object (the paper style's 2D overlay)");
-  o.count_per_mpx = r.get_number_or("count_per_mpx", o.count_per_mpx, 0, 1e6);
-  if (o.species == Species::kRain) {
-    o.length_px = r.get_range_or("length_px", o.length_px, 1e-3, 2000);
-    o.width_px = r.get_number_or("width_px", o.width_px, 1e-3, 50);
-    o.angle_deg = r.get_number_or("angle_deg", o.angle_deg, -80, 80);
-    o.angle_jitter_deg = r.get_number_or("angle_jitter_deg", o.angle_jitter_deg, 0, 45);
-  } else {
-    o.radius_px = r.get_range_or("radius_px", o.radius_px, 1e-3, 200);
-  }
-  o.opacity = r.get_range_or("opacity", o.opacity, 0, 1);
-  o.brightness = r.get_number_or("brightness", o.brightness, 0, 100);
-  o.blur_sigma_px = r.get_number_or("blur_sigma_px", o.blur_sigma_px, 0, 20);
-  r.finish();
+  o = json_fields::read(r, o, kOverlayFields, json_fields::Absent::kKeep);
   o.validate(r.where());
   return o;
 }
 
-Json OverlayOptions::to_json() const {
-  Json j = {{"count_per_mpx", count_per_mpx}, {"opacity", {opacity[0], opacity[1]}}, {"brightness", brightness},
-            {"blur_sigma_px", blur_sigma_px}};
-  if (species == Species::kRain) {
-    j["length_px"] = {length_px[0], length_px[1]};
-    j["width_px"] = width_px;
-    j["angle_deg"] = angle_deg;
-    j["angle_jitter_deg"] = angle_jitter_deg;
-  } else {
-    j["radius_px"] = {radius_px[0], radius_px[1]};
-  }
-  return j;
-}
+Json OverlayOptions::to_json() const { return json_fields::write(*this, kOverlayFields); }
 
 Image render_overlay_alpha(const OverlayOptions& o, uint64_t seed, const std::string& view_name, int width, int height) {
   WGS_CHECK(width > 0 && height > 0);

@@ -5,6 +5,7 @@
 
 #include "core/constants.h"
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "generator/physics.h"
 #include "generator/physics_constants.h"
 
@@ -32,6 +33,28 @@ constexpr double kPaperVisibilityCutoff = 0.1;
 // Turbulence rms as a fraction of the mean wind speed when not given (turbulence intensity of the
 // surface layer, typically 0.1..0.3).
 constexpr double kDefaultTurbulenceIntensity = 0.25;
+
+// The spec's plain sub-objects, each one list of keys; a missing key keeps the value resolved so far.
+constexpr auto kTurbulenceFields = [](auto& s, auto& f) {
+  f("rms_m_s", s.turbulence_rms_m_s);
+  f("length_scale_m", s.length_scale_m);
+  f("modes", s.modes);
+};
+constexpr auto kRenderFields = [](auto& s, auto& f) {
+  f("streak", s.streak, json_fields::OneOf{StreakMode::kAnalytic, StreakMode::kTimeSamples});
+  f("segments", s.segments);
+  f("time_samples", s.time_samples);
+  f("visibility_cutoff", s.visibility_cutoff);
+  f("max_distance_m", s.max_distance_m);
+  f("near_m", s.near_m);
+  f("defocus", s.defocus);
+};
+constexpr auto kCameraFields = [](auto& s, auto& f) {  // each written only when set
+  f("exposure_s", s.exposure_s);
+  f("f_number", s.f_number);
+  f("focal_length_mm", s.focal_length_mm);
+  f("focus_distance_m", s.focus_distance_m);
+};
 
 Eigen::Vector3d read_vec3(const JsonReader& r, const std::string& key, const Eigen::Vector3d& fallback) {
   const std::array<double, 3> v = r.get_array_or<3>(key, {fallback[0], fallback[1], fallback[2]});
@@ -70,14 +93,7 @@ ParticleEffectSpec parse_particles(const JsonReader& r, Species species, Weather
   }
   o.wind.mean_m_s = read_vec3(r, "wind_m_s", Eigen::Vector3d::Zero());
   o.wind.turbulence_rms_m_s = kDefaultTurbulenceIntensity * o.wind.mean_m_s.norm();
-  if (r.has("turbulence")) {
-    JsonReader t = r.child("turbulence");
-    if (!t.is_object()) throw InputError(t.where(), "expected an object");
-    o.wind.turbulence_rms_m_s = t.get_or<double>("rms_m_s", o.wind.turbulence_rms_m_s);
-    o.wind.length_scale_m = t.get_or<double>("length_scale_m", o.wind.length_scale_m);
-    o.wind.modes = t.get_or<int>("modes", o.wind.modes);
-    t.finish();
-  }
+  if (r.has("turbulence")) o.wind = json_fields::read(r.child("turbulence"), o.wind, kTurbulenceFields, json_fields::Absent::kKeep);
   double range[2] = {o.d_min_mm, o.d_max_mm};
   read_range(r, "diameter_range_mm", range);
   o.d_min_mm = range[0], o.d_max_mm = range[1];
@@ -169,8 +185,7 @@ Json particles_to_json(const ParticleEffectSpec& e) {
   const SpeciesOptions& o = e.species;
   Json j = {{"rate_mm_h", o.rate_mm_h},
             {"wind_m_s", {o.wind.mean_m_s.x(), o.wind.mean_m_s.y(), o.wind.mean_m_s.z()}},
-            {"turbulence", {{"rms_m_s", o.wind.turbulence_rms_m_s}, {"length_scale_m", o.wind.length_scale_m},
-                            {"modes", o.wind.modes}}},
+            {"turbulence", json_fields::write(o.wind, kTurbulenceFields)},
             {"diameter_range_mm", {o.d_min_mm, o.d_max_mm}},
             {"size_classes", o.size_classes},
             {"particles_per_cell", o.particles_per_cell},
@@ -230,11 +245,6 @@ std::string WeatherSpec::weather_name() const {
 }
 
 Json WeatherSpec::to_json() const {
-  Json cam = Json::object();
-  if (camera.exposure_s) cam["exposure_s"] = *camera.exposure_s;
-  if (camera.f_number) cam["f_number"] = *camera.f_number;
-  if (camera.focal_length_mm) cam["focal_length_mm"] = *camera.focal_length_mm;
-  if (camera.focus_distance_m) cam["focus_distance_m"] = *camera.focus_distance_m;
   Json effects = Json::object();
   if (rain) effects["rain"] = particles_to_json(*rain);
   if (snow) effects["snow"] = particles_to_json(*snow);
@@ -249,15 +259,8 @@ Json WeatherSpec::to_json() const {
   if (lens_droplets) effects["lens_droplets"] = lens::lens_droplet_spec_to_json(*lens_droplets);
   Json out = {{"seed", seed},
           {"style", to_string(style)},
-          {"camera", cam},
-          {"render",
-           {{"streak", to_string(render.streak)},
-            {"segments", render.segments},
-            {"time_samples", render.time_samples},
-            {"visibility_cutoff", render.visibility_cutoff},
-            {"max_distance_m", render.max_distance_m},
-            {"near_m", render.near_m},
-            {"defocus", render.defocus}}},
+          {"camera", json_fields::write(camera, kCameraFields)},
+          {"render", json_fields::write(render, kRenderFields)},
           {"effects", effects}};
   if (sun) {
     const Eigen::Vector3d& d = sun->to_sun_world;
@@ -289,12 +292,7 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
   }
   if (r.has("camera")) {
     JsonReader c = r.child("camera");
-    if (!c.is_object()) throw InputError(c.where(), "expected an object");
-    spec.camera.exposure_s = c.get_optional<double>("exposure_s");
-    spec.camera.f_number = c.get_optional<double>("f_number");
-    spec.camera.focal_length_mm = c.get_optional<double>("focal_length_mm");
-    spec.camera.focus_distance_m = c.get_optional<double>("focus_distance_m");
-    c.finish();
+    spec.camera = json_fields::read(c, CameraOverrides{}, kCameraFields, json_fields::Absent::kKeep);
     auto positive = [&](const std::optional<double>& v, const char* key, bool allow_zero) {
       if (v && !(std::isfinite(*v) && (allow_zero ? *v >= 0 : *v > 0)))
         throw InputError(c.where(key), allow_zero ? "expected a number >= 0" : "expected a positive number");
@@ -308,16 +306,7 @@ WeatherSpec parse_weather_spec(const JsonReader& r, std::optional<WeatherStyle> 
   }
   if (r.has("render")) {
     JsonReader q = r.child("render");
-    if (!q.is_object()) throw InputError(q.where(), "expected an object");
-    spec.render.streak =
-        q.get_enum_or("streak", spec.render.streak, {StreakMode::kAnalytic, StreakMode::kTimeSamples});
-    spec.render.segments = q.get_or<int>("segments", spec.render.segments);
-    spec.render.time_samples = q.get_or<int>("time_samples", spec.render.time_samples);
-    spec.render.visibility_cutoff = q.get_or<double>("visibility_cutoff", spec.render.visibility_cutoff);
-    spec.render.max_distance_m = q.get_or<double>("max_distance_m", spec.render.max_distance_m);
-    spec.render.near_m = q.get_or<double>("near_m", spec.render.near_m);
-    spec.render.defocus = q.get_or<bool>("defocus", spec.render.defocus);
-    q.finish();
+    spec.render = json_fields::read(q, spec.render, kRenderFields, json_fields::Absent::kKeep);
     spec.render.validate(q.where());
   }
   if (r.has("lighting")) {

@@ -6,6 +6,7 @@
 
 #include "core/constants.h"
 #include "core/error.h"
+#include "core/json_fields.h"
 
 namespace weathergs::nerf {
 
@@ -37,31 +38,52 @@ constexpr double kMaxTurnDeg = 75;
 
 }  // namespace
 
-Json FrustumFrame::to_json() const {
-  Json r = Json::array();
-  for (int i = 0; i < 3; ++i) r.push_back({ref_from_world(i, 0), ref_from_world(i, 1), ref_from_world(i, 2)});
-  return Json{{"ref_from_world", r}, {"center", {center.x(), center.y(), center.z()}},
-              {"u", {u0, u1}},       {"v", {v0, v1}},                          {"w_max", w_max}};
+namespace {
+
+// An image-plane interval [lo, hi] as the JSON pair [lo, hi].
+template <typename Fields>
+void interval(Fields& f, const char* key, double& lo, double& hi) {
+  f.custom(
+      key, [&] { return Json{lo, hi}; },
+      [&](const JsonReader& r, const std::string& k) {
+        const std::array<double, 2> v = r.get_array<2>(k);
+        lo = v[0], hi = v[1];
+      });
 }
 
+constexpr auto kFrameFields = [](auto& s, auto& f) {  // every key required
+  f.custom(
+      "ref_from_world",
+      [&] {
+        Json rows = Json::array();
+        for (int i = 0; i < 3; ++i) rows.push_back({s.ref_from_world(i, 0), s.ref_from_world(i, 1), s.ref_from_world(i, 2)});
+        return rows;
+      },
+      [&](const JsonReader& r, const std::string& k) {
+        const JsonReader m = r.child(k);
+        if (!m.is_array() || m.size() != 3) throw InputError(r.where(k), "expected a 3x3 array");
+        for (size_t i = 0; i < 3; ++i) {
+          const JsonReader row = m.at(i);
+          if (!row.is_array() || row.size() != 3) throw InputError(row.where(), "expected 3 numbers");
+          for (size_t j = 0; j < 3; ++j) s.ref_from_world(int(i), int(j)) = row.at(j).template as<double>();
+        }
+      });
+  f("center", s.center);
+  interval(f, "u", s.u0, s.u1);
+  interval(f, "v", s.v0, s.v1);
+  f("w_max", s.w_max, json_fields::Bounds{1e-9, 1e9});
+};
+
+}  // namespace
+
+Json FrustumFrame::to_json() const { return json_fields::write(*this, kFrameFields); }
+
 FrustumFrame FrustumFrame::from_json(const JsonReader& r) {
-  FrustumFrame f;
-  const JsonReader m = r.child("ref_from_world");
-  if (!m.is_array() || m.size() != 3) throw InputError(r.where("ref_from_world"), "expected a 3x3 array");
-  for (size_t i = 0; i < 3; ++i) {
-    const JsonReader row = m.at(i);
-    if (!row.is_array() || row.size() != 3) throw InputError(row.where(), "expected 3 numbers");
-    for (size_t j = 0; j < 3; ++j) f.ref_from_world(int(i), int(j)) = row.at(j).as<double>();
-  }
-  const auto c = r.get_array<3>("center");
-  f.center = Eigen::Vector3d(c[0], c[1], c[2]);
-  const auto u = r.get_array<2>("u"), v = r.get_array<2>("v");
-  f.u0 = u[0], f.u1 = u[1], f.v0 = v[0], f.v1 = v[1];
-  f.w_max = r.get_number("w_max", 1e-9, 1e9);
-  r.finish();
+  FrustumFrame f = json_fields::read(r, FrustumFrame{}, kFrameFields, json_fields::Absent::kError);
   if (!(f.u1 > f.u0 && f.v1 > f.v0)) throw InputError(r.where("u"), "expected increasing u and v bounds");
   return f;
 }
+
 
 FrustumFrame forward_facing_frame(const std::vector<Camera>& cameras, double near_m) {
   WGS_CHECK(!cameras.empty());

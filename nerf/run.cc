@@ -9,6 +9,7 @@
 #include "core/dataset_layout.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/json_fields.h"
 #include "core/json_reader.h"
 #include "core/progress.h"
 
@@ -24,28 +25,55 @@ constexpr const char* kRunJson = "run.json";
 constexpr double kMinNearM = 0.05;      // the generator's own near clip (capture: Cycles clip_start)
 constexpr double kDefaultNearM = 1.0;   // without SfM points
 
-Json nullable(const std::string& s) { return s.empty() ? Json(nullptr) : Json(s); }
-
-struct RunInfo {
-  std::string dataset;
+// What a radiance-field run's run.json records.
+struct RunRecord {
   bool complete = false;
+  std::string dataset;
+  TrainInputs inputs;
   int iterations = 0;
   double train_seconds = 0, peak_rss_mb = 0;
+  std::array<int, 3> lattice = {2, 2, 2};
+  int64_t occupied_cells = 0;
+  double near_m = 0;
+  std::string near_source;
+  FrustumFrame frame;
+  NerfOptions options;
 };
 
-RunInfo read_run_info(const std::string& run_dir) {
+constexpr auto kRunFields = [](auto& s, auto& f) {
+  f("complete", s.complete);
+  f("dataset", s.dataset);
+  kTrainInputsFields(s.inputs, f);
+  f("iterations", s.iterations);
+  f("train_seconds", s.train_seconds);
+  f("peak_rss_mb", s.peak_rss_mb);
+  f("lattice", s.lattice);
+  f("occupied_cells", s.occupied_cells);
+  f("near_m", s.near_m);
+  f("near_source", s.near_source);
+  f.custom(
+      "frame", [&] { return s.frame.to_json(); },
+      [&](const JsonReader& r, const std::string& k) { s.frame = FrustumFrame::from_json(r.child(k)); });
+  f.custom(
+      "options", [&] { return s.options.to_json(); },
+      [&](const JsonReader& r, const std::string& k) { s.options = NerfOptions::from_json(r.child(k)); });
+};
+
+Json run_json(const RunRecord& rec) {
+  Json j = json_fields::write(rec, kRunFields);
+  j["format"] = kNerfRunFormat;
+  j["version"] = kRunVersion;
+  return j;
+}
+
+RunRecord read_run_info(const std::string& run_dir) {
   const std::string path = (fs::path(run_dir) / kRunJson).string();
   if (!fs::exists(path)) throw InputError(path, "missing: not a radiance-field run folder");
-  const Json j = read_json_file(path);
-  if (j.value("format", "") != kNerfRunFormat) throw InputError(path, std::string("expected format ") + kNerfRunFormat);
-  if (j.value("version", 0) != kRunVersion) throw InputError(path, "expected version " + std::to_string(kRunVersion));
-  RunInfo ri;
-  ri.dataset = j.value("dataset", "");
-  ri.complete = j.value("complete", false);
-  ri.iterations = j.value("iterations", 0);
-  ri.train_seconds = j.value("train_seconds", 0.0);
-  ri.peak_rss_mb = j.value("peak_rss_mb", 0.0);
-  return ri;
+  const JsonReader r = JsonReader::from_file(path);
+  if (r.get<std::string>("format") != kNerfRunFormat)
+    throw InputError(r.where("format"), std::string("expected ") + kNerfRunFormat);
+  if (r.get<int>("version") != kRunVersion) throw InputError(r.where("version"), "expected version " + std::to_string(kRunVersion));
+  return json_fields::read(r, RunRecord{}, kRunFields, json_fields::Absent::kError);
 }
 
 // Renders `names` of the dataset into an atomic folder with info.json.
@@ -144,24 +172,20 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   double excluded = 0;  // seconds spent on snapshots
   auto info_json = [&](bool complete, double seconds) {
     const GridDims d = trainer.field().dims();
-    return Json{{"format", kNerfRunFormat},
-                {"version", kRunVersion},
-                {"complete", complete},
-                {"dataset", fs::absolute(o.dataset).string()},
-                {"images", to_string(o.inputs.images)},
-                {"images_dir", nullable(o.inputs.images_dir)},
-                {"masks", to_string(o.inputs.masks)},
-                {"masks_dir", nullable(o.inputs.masks_dir)},
-                {"points_dir", nullable(o.inputs.points_dir)},
-                {"iterations", trainer.iteration()},
-                {"train_seconds", seconds},
-                {"peak_rss_mb", peak_rss_mb()},
-                {"lattice", {d.nu, d.nv, d.nw}},
-                {"occupied_cells", trainer.field().occupied_cells()},
-                {"near_m", near},
-                {"near_source", result.near_source},
-                {"frame", frame.to_json()},
-                {"options", o.nerf.to_json()}};
+    RunRecord rec;
+    rec.complete = complete;
+    rec.dataset = fs::absolute(o.dataset).string();
+    rec.inputs = o.inputs;
+    rec.iterations = trainer.iteration();
+    rec.train_seconds = seconds;
+    rec.peak_rss_mb = peak_rss_mb();
+    rec.lattice = {d.nu, d.nv, d.nw};
+    rec.occupied_cells = trainer.field().occupied_cells();
+    rec.near_m = near;
+    rec.near_source = result.near_source;
+    rec.frame = frame;
+    rec.options = o.nerf;
+    return run_json(rec);
   };
   write_file_atomic((run / kRunJson).string(), info_json(false, 0).dump(2) + "\n");
   std::vector<int> snaps;
@@ -195,16 +219,11 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
 
 NerfRenderResult render_nerf_run(const NerfRenderOptions& o) {
   o.validate();
-  const RunInfo ri = read_run_info(o.model);
+  const RunRecord ri = read_run_info(o.model);
   if (!ri.complete) throw InputError((fs::path(o.model) / kRunJson).string(), "the run is not complete: train it first");
   const RadianceField field = RadianceField::load((fs::path(o.model) / kFieldFile).string());
   const Dataset ds = read_dataset(o.dataset.empty() ? ri.dataset : o.dataset);
-  const Json run = read_json_file((fs::path(o.model) / kRunJson).string());
-  MarchSettings march;
-  const Json& opt = run.at("options");
-  march.samples_per_cell = opt.value("samples_per_cell", march.samples_per_cell);
-  march.min_weight = opt.value("min_weight", march.min_weight);
-  march.min_transmittance = opt.value("min_transmittance", march.min_transmittance);
+  const MarchSettings& march = ri.options.march;
   std::vector<std::string> all_views;
   for (const Camera& c : ds.cameras) all_views.push_back(c.name);
   const std::vector<std::string>& names = o.split == "all" ? all_views : ds.split(o.split);

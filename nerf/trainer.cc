@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "core/parallel.h"
 #include "core/rng.h"
 
@@ -45,41 +46,35 @@ void NerfOptions::validate(const std::string& where) const {
   if (!(march.min_transmittance >= 0 && march.min_transmittance < 1)) fail("march.min_transmittance", "must be in [0, 1)");
 }
 
-Json NerfOptions::to_json() const {
-  return Json{{"iterations", iterations},         {"batch_rays", batch_rays},
-              {"seed", seed},                     {"pixels_per_cell", pixels_per_cell},
-              {"depth_cells", depth_cells},       {"level_scales", level_scales},
-              {"upsample_at", upsample_at},       {"alpha_init", alpha_init},
-              {"lr_density", lr_density},         {"lr_color", lr_color},
-              {"lr_env", lr_env},                 {"lr_final_factor", lr_final_factor},
-              {"tv_density", tv_density},         {"tv_color", tv_color},
-              {"tv_fraction", tv_fraction},       {"near_m", near_m},
-              {"samples_per_cell", march.samples_per_cell}, {"min_weight", march.min_weight},
-              {"min_transmittance", march.min_transmittance}};
-}
+namespace {
+// Every key required: a radiance-field run records all of its options.
+constexpr auto kNerfFields = [](auto& s, auto& f) {
+  f("iterations", s.iterations);
+  f("batch_rays", s.batch_rays);
+  f("seed", s.seed);
+  f("pixels_per_cell", s.pixels_per_cell);
+  f("depth_cells", s.depth_cells);
+  f("level_scales", s.level_scales);
+  f("upsample_at", s.upsample_at);
+  f("alpha_init", s.alpha_init);
+  f("lr_density", s.lr_density);
+  f("lr_color", s.lr_color);
+  f("lr_env", s.lr_env);
+  f("lr_final_factor", s.lr_final_factor);
+  f("tv_density", s.tv_density);
+  f("tv_color", s.tv_color);
+  f("tv_fraction", s.tv_fraction);
+  f("near_m", s.near_m);
+  f("samples_per_cell", s.march.samples_per_cell);
+  f("min_weight", s.march.min_weight);
+  f("min_transmittance", s.march.min_transmittance);
+};
+}  // namespace
+
+Json NerfOptions::to_json() const { return json_fields::write(*this, kNerfFields); }
 
 NerfOptions NerfOptions::from_json(const JsonReader& r) {
-  NerfOptions o;
-  o.iterations = r.get<int>("iterations");
-  o.batch_rays = r.get<int>("batch_rays");
-  o.seed = r.get<uint64_t>("seed");
-  o.pixels_per_cell = r.get<double>("pixels_per_cell");
-  o.depth_cells = r.get<int>("depth_cells");
-  o.level_scales = r.get<std::vector<double>>("level_scales");
-  o.upsample_at = r.get<std::vector<int>>("upsample_at");
-  o.alpha_init = r.get<double>("alpha_init");
-  o.lr_density = r.get<double>("lr_density");
-  o.lr_color = r.get<double>("lr_color");
-  o.lr_env = r.get<double>("lr_env");
-  o.lr_final_factor = r.get<double>("lr_final_factor");
-  o.tv_density = r.get<double>("tv_density");
-  o.tv_color = r.get<double>("tv_color");
-  o.tv_fraction = r.get<double>("tv_fraction");
-  o.near_m = r.get<double>("near_m");
-  o.march.samples_per_cell = r.get<int>("samples_per_cell");
-  o.march.min_weight = r.get<float>("min_weight");
-  o.march.min_transmittance = r.get<float>("min_transmittance");
-  r.finish();
+  NerfOptions o = json_fields::read(r, NerfOptions{}, kNerfFields, json_fields::Absent::kError);
   o.validate(r.where());
   return o;
 }

@@ -26,51 +26,75 @@ constexpr const char* kRunFormat = "weathergs-3dgs-run";
 // 2: images/masks as named choices plus images_dir/masks_dir (1 mixed folder paths into the names).
 constexpr int kRunVersion = 2;
 
-Json schedule_json(const TrainOptions& e) {
-  return {{"densify_from", e.densify_from},
-          {"densify_until", e.densify_until},
-          {"densification_interval", e.densification_interval},
-          {"opacity_reset_interval", e.opacity_reset_interval},
-          {"large_prune_from", e.large_prune_from},
-          {"sh_degree_interval", e.sh_degree_interval}};
-}
-
-Json optional_path(const std::string& p) { return p.empty() ? Json(nullptr) : Json(p); }
-
-Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool complete, const std::string& init) {
-  return Json{{"format", kRunFormat},
-              {"version", kRunVersion},
-              {"complete", complete},
-              {"dataset", fs::absolute(o.dataset).lexically_normal().string()},
-              {"images", to_string(o.inputs.images)},
-              {"images_dir", optional_path(o.inputs.images_dir)},
-              {"masks", to_string(o.inputs.masks)},
-              {"masks_dir", optional_path(o.inputs.masks_dir)},
-              {"points_dir", optional_path(o.inputs.points_dir.empty() ? "" : fs::absolute(o.inputs.points_dir).lexically_normal().string())},
-              {"initialization", init},
-              {"iterations", t.iteration()},
-              {"sh_degree", t.sh_degree()},
-              {"num_gaussians", int64_t(t.gaussians().size()) - t.num_distractors()},
-              {"num_distractors", t.num_distractors()},
-              {"train_seconds", seconds},
-              {"peak_rss_mb", peak_rss_mb()},
-              {"densify_capped", t.densify_capped()},
-              {"extent", t.extent()},
-              {"options", t.options().to_json()},
-              {"effective_schedule", schedule_json(t.effective_options())}};
-}
-
-struct RunInfo {
+// What run.json records (a run folder's settings record and state).
+struct RunRecord {
+  bool complete = false;
   std::string dataset;
   TrainInputs inputs;
+  std::string initialization;
   int iterations = 0, sh_degree = 0;
-  int64_t num_gaussians = 0;
-  double train_seconds = 0, peak_rss_mb = 0;
-  bool complete = false;
+  int64_t num_gaussians = 0, num_distractors = 0;
+  double train_seconds = 0, peak_rss_mb = 0, extent = 0;
+  int densify_capped = 0;
   TrainOptions options;
+  TrainOptions effective;  // written as effective_schedule for readers; derived from options, so not read
 };
 
-RunInfo read_run_json(const std::string& run_dir) {
+constexpr auto kRunFields = [](auto& s, auto& f) {
+  using json_fields::Optional;
+  f("complete", s.complete);
+  f("dataset", s.dataset);
+  kTrainInputsFields(s.inputs, f);
+  f("initialization", s.initialization);
+  f("iterations", s.iterations);
+  f("sh_degree", s.sh_degree, json_fields::Bounds{0, kMaxShDegree});
+  f("num_gaussians", s.num_gaussians);
+  f("num_distractors", s.num_distractors, Optional{});  // desplat's; absent in older run.json
+  f("train_seconds", s.train_seconds);
+  f("peak_rss_mb", s.peak_rss_mb);
+  f("densify_capped", s.densify_capped, Optional{});
+  f("extent", s.extent);
+  f.custom(
+      "options", [&] { return s.options.to_json(); },
+      [&](const JsonReader& r, const std::string& k) { s.options = TrainOptions::from_json(r.child(k)); });
+  f.custom(
+      "effective_schedule",
+      [&] {
+        const TrainOptions& e = s.effective;
+        return Json{{"densify_from", e.densify_from},
+                    {"densify_until", e.densify_until},
+                    {"densification_interval", e.densification_interval},
+                    {"opacity_reset_interval", e.opacity_reset_interval},
+                    {"large_prune_from", e.large_prune_from},
+                    {"sh_degree_interval", e.sh_degree_interval}};
+      },
+      [&](const JsonReader& r, const std::string& k) { r.mark(k); });
+};
+
+Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool complete, const std::string& init) {
+  RunRecord rec;
+  rec.complete = complete;
+  rec.dataset = fs::absolute(o.dataset).lexically_normal().string();
+  rec.inputs = o.inputs;
+  if (!o.inputs.points_dir.empty()) rec.inputs.points_dir = fs::absolute(o.inputs.points_dir).lexically_normal().string();
+  rec.initialization = init;
+  rec.iterations = t.iteration();
+  rec.sh_degree = t.sh_degree();
+  rec.num_gaussians = int64_t(t.gaussians().size()) - t.num_distractors();
+  rec.num_distractors = t.num_distractors();
+  rec.train_seconds = seconds;
+  rec.peak_rss_mb = peak_rss_mb();
+  rec.densify_capped = t.densify_capped();
+  rec.extent = t.extent();
+  rec.options = t.options();
+  rec.effective = t.effective_options();
+  Json j = json_fields::write(rec, kRunFields);
+  j["format"] = kRunFormat;
+  j["version"] = kRunVersion;
+  return j;
+}
+
+RunRecord read_run_json(const std::string& run_dir) {
   const std::string path = (fs::path(run_dir) / "run.json").string();
   if (!fs::exists(path)) throw InputError(path, "missing: not a training run folder");
   JsonReader r = JsonReader::from_file(path);
@@ -78,28 +102,7 @@ RunInfo read_run_json(const std::string& run_dir) {
   if (const int v = r.get<int>("version"); v != kRunVersion)
     throw InputError(r.where("version"), "run folder of version " + std::to_string(v) + ", this weathergs reads version " +
                                              std::to_string(kRunVersion) + ": train it again");
-  RunInfo info;
-  info.complete = r.get<bool>("complete");
-  info.dataset = r.get<std::string>("dataset");
-  info.inputs.images = parse_train_images(r.get<std::string>("images"), r.where("images"));
-  info.inputs.images_dir = r.get_optional<std::string>("images_dir").value_or("");
-  info.inputs.masks = parse_train_masks(r.get<std::string>("masks"), r.where("masks"));
-  info.inputs.masks_dir = r.get_optional<std::string>("masks_dir").value_or("");
-  info.inputs.points_dir = r.get_optional<std::string>("points_dir").value_or("");
-  r.get<std::string>("initialization");
-  info.iterations = r.get<int>("iterations");
-  info.sh_degree = r.get<int>("sh_degree");
-  if (info.sh_degree < 0 || info.sh_degree > kMaxShDegree) throw InputError(r.where("sh_degree"), "expected 0..3");
-  info.num_gaussians = r.get<int64_t>("num_gaussians");
-  info.train_seconds = r.get<double>("train_seconds");
-  info.peak_rss_mb = r.get<double>("peak_rss_mb");
-  r.get<double>("extent");
-  r.get_optional<int>("densify_capped");
-  r.get_optional<int64_t>("num_distractors");  // desplat runs; absent in older run.json
-  info.options = TrainOptions::from_json(r.child("options"));
-  r.mark("effective_schedule");  // derived from options
-  r.finish();
-  return info;
+  return json_fields::read(r, RunRecord{}, kRunFields, json_fields::Absent::kError);
 }
 
 }  // namespace
@@ -216,7 +219,7 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
   Trainer trainer(std::move(views), std::move(initial), o.train, extent);
   double seconds_before = 0;
   if (o.resume) {
-    const RunInfo ri = read_run_json(o.out);
+    const RunRecord ri = read_run_json(o.out);
     TrainInputs given = o.inputs;
     if (!given.points_dir.empty()) given.points_dir = fs::absolute(given.points_dir).lexically_normal().string();
     if (!(ri.inputs == given) || fs::path(ri.dataset) != fs::absolute(o.dataset).lexically_normal())
@@ -264,7 +267,7 @@ TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_i
 }
 
 TrainRunOptions read_run_options(const std::string& run_dir) {
-  const RunInfo ri = read_run_json(run_dir);
+  const RunRecord ri = read_run_json(run_dir);
   TrainRunOptions o;
   o.dataset = ri.dataset;
   o.inputs = ri.inputs;
@@ -281,7 +284,7 @@ std::string snapshot_stem(const std::string& run_dir, int iteration) {
 
 RenderRunResult render_run(const RenderRunOptions& o) {
   o.validate();
-  RunInfo ri = read_run_json(o.model);
+  RunRecord ri = read_run_json(o.model);
   std::string ply = (fs::path(o.model) / "point_cloud.ply").string();
   if (o.snapshot > 0) {
     const std::string stem = snapshot_stem(o.model, o.snapshot);

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "reconstruction/trainer.h"
 
 namespace weathergs::reconstruction {
@@ -57,47 +58,65 @@ void TrainOptions::validate(const std::string& where) const {
          "need 0 < near < far < inf");
 }
 
-Json TrainOptions::to_json() const {
-  return Json{{"iterations", iterations},
-              {"seed", seed},
-              {"lambda_dssim", lambda_dssim},
-              {"position_lr_init", position_lr_init},
-              {"position_lr_final", position_lr_final},
-              {"feature_lr", feature_lr},
-              {"opacity_lr", opacity_lr},
-              {"scaling_lr", scaling_lr},
-              {"rotation_lr", rotation_lr},
-              {"adam_beta1", adam_beta1},
-              {"adam_beta2", adam_beta2},
-              {"adam_eps", adam_eps},
-              {"max_sh_degree", max_sh_degree},
-              {"sh_degree_interval", sh_degree_interval},
-              {"percent_dense", percent_dense},
-              {"densify_from", densify_from},
-              {"densify_until", densify_until},
-              {"densification_interval", densification_interval},
-              {"densify_grad_threshold", densify_grad_threshold},
-              {"opacity_reset_interval", opacity_reset_interval},
-              {"schedule", to_string(schedule)},
-              {"min_opacity", min_opacity},
-              {"max_screen_size_px", max_screen_size_px},
-              {"max_world_size", max_world_size},
-              {"large_prune_from", large_prune_from},
-              {"large_prune", to_string(large_prune)},
-              {"max_gaussians", max_gaussians},
-              {"background", {background[0], background[1], background[2]}},
-              {"random_init", to_string(random_init)},
-              {"robust", to_string(robust)},
-              {"mask_normalization", to_string(mask_normalization)},
-              {"distractors_per_view", distractors_per_view},
-              {"distractor_opacity_weight", distractor_opacity_weight},
-              {"in_the_wild", in_the_wild},
-              {"in_the_wild_from", in_the_wild_from},
-              {"visibility_weight", visibility_weight},
-              {"random_init_count", random_init_count},
-              {"random_init_near_m", random_init_near_m},
-              {"random_init_far_m", random_init_far_m}};
-}
+namespace {
+
+using namespace json_fields;
+using Schedule = TrainOptions::Schedule;
+using LargePrune = TrainOptions::LargePrune;
+using RandomInit = TrainOptions::RandomInit;
+using Robust = TrainOptions::Robust;
+
+// The one list of TrainOptions' JSON keys (run.json, checkpoints); a missing key keeps its default.
+constexpr auto kFields = [](auto& s, auto& f) {
+  f("iterations", s.iterations);
+  f("seed", s.seed);
+  f("lambda_dssim", s.lambda_dssim);
+  f("position_lr_init", s.position_lr_init);
+  f("position_lr_final", s.position_lr_final);
+  f("feature_lr", s.feature_lr);
+  f("opacity_lr", s.opacity_lr);
+  f("scaling_lr", s.scaling_lr);
+  f("rotation_lr", s.rotation_lr);
+  f("adam_beta1", s.adam_beta1);
+  f("adam_beta2", s.adam_beta2);
+  f("adam_eps", s.adam_eps);
+  f("max_sh_degree", s.max_sh_degree);
+  f("sh_degree_interval", s.sh_degree_interval);
+  f("percent_dense", s.percent_dense);
+  f("densify_from", s.densify_from);
+  f("densify_until", s.densify_until);
+  f("densification_interval", s.densification_interval);
+  f("densify_grad_threshold", s.densify_grad_threshold);
+  f("opacity_reset_interval", s.opacity_reset_interval);
+  f("schedule", s.schedule, OneOf{Schedule::kReference, Schedule::kScaled});
+  f("min_opacity", s.min_opacity);
+  f("max_screen_size_px", s.max_screen_size_px);
+  f("max_world_size", s.max_world_size);
+  // A run or checkpoint stored without this key started the prune after the first reset, so it resumes
+  // with the start it had (a checkpoint stores the effective, scaled options).
+  f("large_prune_from", s.large_prune_from, WhenAbsent{s.opacity_reset_interval});
+  // Runs and checkpoints stored without this key trained with the reference rule, and a resumed one
+  // must go on with it, not switch silently.
+  f("large_prune", s.large_prune, OneOf{LargePrune::kCameraExtent, LargePrune::kDistance},
+    WhenAbsent{LargePrune::kCameraExtent});
+  f("max_gaussians", s.max_gaussians);
+  f("background", s.background);
+  f("random_init", s.random_init, OneOf{RandomInit::kFrustum, RandomInit::kPhotoConsistent});
+  f("random_init_count", s.random_init_count);
+  f("distractors_per_view", s.distractors_per_view);
+  f("distractor_opacity_weight", s.distractor_opacity_weight);
+  f("in_the_wild", s.in_the_wild);
+  f("in_the_wild_from", s.in_the_wild_from);
+  f("visibility_weight", s.visibility_weight);
+  f("robust", s.robust, OneOf{Robust::kNone, Robust::kRobustFilter});
+  f("mask_normalization", s.mask_normalization, OneOf{MaskNormalization::kValid, MaskNormalization::kReference});
+  f("random_init_near_m", s.random_init_near_m);
+  f("random_init_far_m", s.random_init_far_m);
+};
+
+}  // namespace
+
+Json TrainOptions::to_json() const { return json_fields::write(*this, kFields); }
 
 const char* to_string(TrainOptions::RandomInit r) {
   return r == TrainOptions::RandomInit::kFrustum ? "frustum" : "photo";
@@ -160,58 +179,7 @@ TrainOptions TrainOptions::effective() const {
 }
 
 TrainOptions TrainOptions::from_json(const JsonReader& r) {
-  TrainOptions o;
-  o.iterations = r.get_or("iterations", o.iterations);
-  o.seed = r.get_or<uint64_t>("seed", o.seed);
-  o.lambda_dssim = r.get_or("lambda_dssim", o.lambda_dssim);
-  o.position_lr_init = r.get_or("position_lr_init", o.position_lr_init);
-  o.position_lr_final = r.get_or("position_lr_final", o.position_lr_final);
-  o.feature_lr = r.get_or("feature_lr", o.feature_lr);
-  o.opacity_lr = r.get_or("opacity_lr", o.opacity_lr);
-  o.scaling_lr = r.get_or("scaling_lr", o.scaling_lr);
-  o.rotation_lr = r.get_or("rotation_lr", o.rotation_lr);
-  o.adam_beta1 = r.get_or("adam_beta1", o.adam_beta1);
-  o.adam_beta2 = r.get_or("adam_beta2", o.adam_beta2);
-  o.adam_eps = r.get_or("adam_eps", o.adam_eps);
-  o.max_sh_degree = r.get_or("max_sh_degree", o.max_sh_degree);
-  o.sh_degree_interval = r.get_or("sh_degree_interval", o.sh_degree_interval);
-  o.percent_dense = r.get_or("percent_dense", o.percent_dense);
-  o.densify_from = r.get_or("densify_from", o.densify_from);
-  o.densify_until = r.get_or("densify_until", o.densify_until);
-  o.densification_interval = r.get_or("densification_interval", o.densification_interval);
-  o.densify_grad_threshold = r.get_or("densify_grad_threshold", o.densify_grad_threshold);
-  o.opacity_reset_interval = r.get_or("opacity_reset_interval", o.opacity_reset_interval);
-  o.schedule = r.get_enum_or("schedule", o.schedule, {Schedule::kReference, Schedule::kScaled});
-  o.min_opacity = r.get_or("min_opacity", o.min_opacity);
-  o.max_screen_size_px = r.get_or("max_screen_size_px", o.max_screen_size_px);
-  o.max_world_size = r.get_or("max_world_size", o.max_world_size);
-  // A run or checkpoint stored without this key started the prune after the first reset, so it resumes
-  // with the start it had (a checkpoint stores the effective, scaled options).
-  o.large_prune_from = r.get_or("large_prune_from", o.opacity_reset_interval);
-  // Runs and checkpoints stored without this key trained with the reference rule, and a resumed one
-  // must go on with it, not switch silently.
-  o.large_prune = r.get_enum_or("large_prune", LargePrune::kCameraExtent,
-                                {LargePrune::kCameraExtent, LargePrune::kDistance});
-  o.max_gaussians = r.get_or<int64_t>("max_gaussians", o.max_gaussians);
-  if (r.has("background")) {
-    JsonReader b = r.child("background");
-    if (!b.is_array() || b.size() != 3) throw InputError(b.where(), "expected an array of 3 numbers");
-    for (int c = 0; c < 3; ++c) o.background[c] = b.at(c).as<double>();
-  }
-  o.random_init = r.get_enum_or("random_init", o.random_init,
-                                 {RandomInit::kFrustum, RandomInit::kPhotoConsistent});
-  o.random_init_count = r.get_or("random_init_count", o.random_init_count);
-  o.distractors_per_view = r.get_or("distractors_per_view", o.distractors_per_view);
-  o.distractor_opacity_weight = r.get_or("distractor_opacity_weight", o.distractor_opacity_weight);
-  o.in_the_wild = r.get_or("in_the_wild", o.in_the_wild);
-  o.in_the_wild_from = r.get_or("in_the_wild_from", o.in_the_wild_from);
-  o.visibility_weight = r.get_or("visibility_weight", o.visibility_weight);
-  o.robust = r.get_enum_or("robust", o.robust, {Robust::kNone, Robust::kRobustFilter});
-  o.mask_normalization = r.get_enum_or("mask_normalization", o.mask_normalization,
-                                       {MaskNormalization::kValid, MaskNormalization::kReference});
-  o.random_init_near_m = r.get_or("random_init_near_m", o.random_init_near_m);
-  o.random_init_far_m = r.get_or("random_init_far_m", o.random_init_far_m);
-  r.finish();
+  TrainOptions o = json_fields::read(r, TrainOptions{}, kFields, json_fields::Absent::kKeep);
   o.validate(r.where());
   return o;
 }

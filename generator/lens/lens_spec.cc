@@ -3,6 +3,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/json_fields.h"
+
 namespace weathergs::generator::lens {
 
 const char* to_string(Attach a) { return a == Attach::kLens ? "lens" : "window"; }
@@ -14,8 +16,6 @@ const char* to_string(CapGeometry g) { return g == CapGeometry::kAnalytic ? "ana
 const char* to_string(LensMaskRule r) { return r == LensMaskRule::kPerceptible ? "perceptible" : "coverage"; }
 
 namespace {
-
-Eigen::Vector3d to_vec(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
 
 std::string num(double v) {
   std::ostringstream s;
@@ -30,69 +30,86 @@ void require(bool ok, const std::string& where, const std::string& field, const 
 
 }  // namespace
 
+namespace {
+
+using json_fields::OneOf;
+using json_fields::Range;
+
+constexpr auto kWindowFields = [](auto& s, auto& f) {  // every key required but the up direction
+  f("center_world", s.center_world);
+  f("normal_world", s.normal_world);
+  f("up_world", s.up_world, json_fields::Optional{});
+  f("size_m", s.size_m);
+};
+
+// The one list of the lens_droplets effect's keys; a missing key keeps its documented default.
+constexpr auto kLensFields = [](auto& s, auto& f) {
+  f("count", s.count);
+  f("radius_mm", s.radius_mm, Range{});
+  f("radius_distribution", s.radius_distribution, OneOf{RadiusDistribution::kLogUniform, RadiusDistribution::kUniform});
+  f("contact_angle_deg", s.contact_angle_deg, Range{});
+  f("glass_distance_m", s.glass_distance_m);
+  f("glass_thickness_mm", s.glass_thickness_mm);
+  f("glass_refractive_index", s.glass_refractive_index);
+  f("attach", s.attach, OneOf{Attach::kLens, Attach::kWindow});
+  f("drop_side", s.drop_side, OneOf{DropSide::kScene, DropSide::kCamera});
+  f("glass_tilt_deg", s.glass_tilt_deg);
+  f.custom(  // a window pose, or null on the lens
+      "window", [&] { return s.window ? json_fields::write(*s.window, kWindowFields) : Json(nullptr); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (r.has(k) && !r.value()[k].is_null())
+          s.window = json_fields::read(r.child(k), WindowPose{}, kWindowFields, json_fields::Absent::kError);
+        else
+          r.mark(k);
+      });
+  f("refractive_index", s.refractive_index);
+  f("slide_speed_mm_s", s.slide_speed_mm_s);
+  f("slide_min_radius_mm", s.slide_min_radius_mm);
+  f("samples_per_pixel", s.samples_per_pixel);
+  f("max_bounces", s.max_bounces);
+  f("geometry", s.geometry, OneOf{CapGeometry::kAnalytic, CapGeometry::kTriangles});
+  f("cap_segments", s.cap_segments);
+  f.custom(  // [r, g, b], or "mean" / "sky" for the view's mean or the sky
+      "environment_radiance",
+      [&] { return s.environment_radiance ? Json(*s.environment_radiance) : Json(s.environment_sky ? "sky" : "mean"); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (r.has(k) && r.value()[k].is_string()) {
+          const std::string v = r.get<std::string>(k);
+          if (v != "mean" && v != "sky")
+            throw InputError(r.where(k), "expected \"mean\", \"sky\" or [r, g, b], got \"" + v + "\"");
+          s.environment_sky = v == "sky";
+        } else if (r.has(k) && !r.value()[k].is_null()) {
+          s.environment_radiance = r.get_array<3>(k);
+        } else {
+          r.mark(k);
+        }
+      });
+  f.custom(  // [r, g, b], or "environment" for what the drops see around them
+      "camera_radiance", [&] { return s.camera_radiance ? Json(*s.camera_radiance) : Json("environment"); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (r.has(k) && r.value()[k].is_string()) {
+          const std::string v = r.get<std::string>(k);
+          if (v != "environment")
+            throw InputError(r.where(k), "expected \"environment\" or [r, g, b], got \"" + v + "\"");
+          s.camera_radiance.reset();
+        } else if (r.has(k) && !r.value()[k].is_null()) {
+          s.camera_radiance = r.get_array<3>(k);
+        } else {
+          r.mark(k);
+        }
+      });
+  f("defocus", s.defocus);
+  f("mask_rule", s.mask_rule, OneOf{LensMaskRule::kPerceptible, LensMaskRule::kCoverage});
+  f("mask_min_change_levels", s.mask_min_change_levels, json_fields::Bounds{0, 255});
+  f("mask_threshold", s.mask_threshold);
+  f("sampling_margin", s.sampling_margin);
+};
+
+}  // namespace
+
 LensDropletSpec parse_lens_droplet_spec(const JsonReader& r) {
   if (!r.is_object()) throw InputError(r.where(), "expected an object (the lens_droplets effect)");
-  LensDropletSpec s;
-  s.count = r.get_or<int>("count", s.count);
-  s.radius_mm = r.get_range_or("radius_mm", s.radius_mm);
-  s.radius_distribution = r.get_enum_or("radius_distribution", s.radius_distribution,
-                                    {RadiusDistribution::kLogUniform, RadiusDistribution::kUniform});
-  s.contact_angle_deg = r.get_range_or("contact_angle_deg", s.contact_angle_deg);
-  s.glass_distance_m = r.get_or<double>("glass_distance_m", s.glass_distance_m);
-  s.glass_thickness_mm = r.get_or<double>("glass_thickness_mm", s.glass_thickness_mm);
-  s.glass_refractive_index = r.get_or<double>("glass_refractive_index", s.glass_refractive_index);
-  s.attach = r.get_enum_or("attach", s.attach, {Attach::kLens, Attach::kWindow});
-  s.drop_side = r.get_enum_or("drop_side", s.drop_side, {DropSide::kScene, DropSide::kCamera});
-  s.glass_tilt_deg = r.get_array_or<2>("glass_tilt_deg", s.glass_tilt_deg);
-  if (r.has("window") && !r.value()["window"].is_null()) {
-    JsonReader w = r.child("window");
-    if (!w.is_object()) throw InputError(w.where(), "expected an object");
-    WindowPose p;
-    p.center_world = to_vec(w.get_array_or<3>("center_world", {0, 0, 0}));
-    if (!w.has("center_world")) w.fail("center_world", "a required key");
-    p.normal_world = to_vec(w.get_array_or<3>("normal_world", {0, 1, 0}));
-    if (!w.has("normal_world")) w.fail("normal_world", "a required key");
-    p.up_world = to_vec(w.get_array_or<3>("up_world", {0, 0, 1}));
-    p.size_m = w.get_array_or<2>("size_m", p.size_m);
-    if (!w.has("size_m")) w.fail("size_m", "a required key");
-    w.finish();
-    s.window = p;
-  } else {
-    r.mark("window");
-  }
-  s.refractive_index = r.get_or<double>("refractive_index", s.refractive_index);
-  s.slide_speed_mm_s = r.get_or<double>("slide_speed_mm_s", s.slide_speed_mm_s);
-  s.slide_min_radius_mm = r.get_or<double>("slide_min_radius_mm", s.slide_min_radius_mm);
-  s.samples_per_pixel = r.get_or<int>("samples_per_pixel", s.samples_per_pixel);
-  s.max_bounces = r.get_or<int>("max_bounces", s.max_bounces);
-  s.geometry = r.get_enum_or("geometry", s.geometry, {CapGeometry::kAnalytic, CapGeometry::kTriangles});
-  s.cap_segments = r.get_or<int>("cap_segments", s.cap_segments);
-  if (r.has("environment_radiance") && r.value()["environment_radiance"].is_string()) {
-    std::string v = r.get<std::string>("environment_radiance");
-    if (v != "mean" && v != "sky")
-      throw InputError(r.where("environment_radiance"), "expected \"mean\", \"sky\" or [r, g, b], got \"" + v + "\"");
-    s.environment_sky = v == "sky";
-  } else if (r.has("environment_radiance") && !r.value()["environment_radiance"].is_null()) {
-    s.environment_radiance = r.get_array_or<3>("environment_radiance", {0, 0, 0});
-  } else {
-    r.mark("environment_radiance");
-  }
-  if (r.has("camera_radiance") && r.value()["camera_radiance"].is_string()) {
-    if (r.get<std::string>("camera_radiance") != "environment")
-      throw InputError(r.where("camera_radiance"), "expected \"environment\" or [r, g, b], got \"" +
-                                                       r.get<std::string>("camera_radiance") + "\"");
-    s.camera_radiance.reset();
-  } else if (r.has("camera_radiance") && !r.value()["camera_radiance"].is_null()) {
-    s.camera_radiance = r.get_array_or<3>("camera_radiance", {0, 0, 0});
-  } else {
-    r.mark("camera_radiance");
-  }
-  s.defocus = r.get_or<bool>("defocus", s.defocus);
-  s.mask_rule = r.get_enum_or("mask_rule", s.mask_rule, {LensMaskRule::kPerceptible, LensMaskRule::kCoverage});
-  s.mask_min_change_levels = r.get_number_or("mask_min_change_levels", s.mask_min_change_levels, 0, 255);
-  s.mask_threshold = r.get_or<double>("mask_threshold", s.mask_threshold);
-  s.sampling_margin = r.get_or<double>("sampling_margin", s.sampling_margin);
-  r.finish();
+  LensDropletSpec s = json_fields::read(r, LensDropletSpec{}, kLensFields, json_fields::Absent::kKeep);
   validate_lens_droplet_spec(s, r.where());
   return s;
 }
@@ -166,49 +183,6 @@ void validate_lens_droplet_spec(const LensDropletSpec& s, const std::string& whe
           "sampling_margin", num(s.sampling_margin), "0..10 (fraction of the visible glass per side)");
 }
 
-Json lens_droplet_spec_to_json(const LensDropletSpec& s) {
-  Json j;
-  j["count"] = s.count;
-  j["radius_mm"] = {s.radius_mm[0], s.radius_mm[1]};
-  j["radius_distribution"] = to_string(s.radius_distribution);
-  j["contact_angle_deg"] = {s.contact_angle_deg[0], s.contact_angle_deg[1]};
-  j["glass_distance_m"] = s.glass_distance_m;
-  j["glass_thickness_mm"] = s.glass_thickness_mm;
-  j["glass_refractive_index"] = s.glass_refractive_index;
-  j["attach"] = to_string(s.attach);
-  j["drop_side"] = to_string(s.drop_side);
-  j["glass_tilt_deg"] = {s.glass_tilt_deg[0], s.glass_tilt_deg[1]};
-  if (s.window) {
-    const WindowPose& w = *s.window;
-    j["window"] = {{"center_world", {w.center_world.x(), w.center_world.y(), w.center_world.z()}},
-                   {"normal_world", {w.normal_world.x(), w.normal_world.y(), w.normal_world.z()}},
-                   {"up_world", {w.up_world.x(), w.up_world.y(), w.up_world.z()}},
-                   {"size_m", {w.size_m[0], w.size_m[1]}}};
-  } else {
-    j["window"] = nullptr;
-  }
-  j["refractive_index"] = s.refractive_index;
-  j["slide_speed_mm_s"] = s.slide_speed_mm_s;
-  j["slide_min_radius_mm"] = s.slide_min_radius_mm;
-  j["samples_per_pixel"] = s.samples_per_pixel;
-  j["max_bounces"] = s.max_bounces;
-  j["geometry"] = to_string(s.geometry);
-  j["cap_segments"] = s.cap_segments;
-  if (s.environment_radiance)
-    j["environment_radiance"] = {(*s.environment_radiance)[0], (*s.environment_radiance)[1],
-                                 (*s.environment_radiance)[2]};
-  else
-    j["environment_radiance"] = s.environment_sky ? "sky" : "mean";
-  if (s.camera_radiance)
-    j["camera_radiance"] = {(*s.camera_radiance)[0], (*s.camera_radiance)[1], (*s.camera_radiance)[2]};
-  else
-    j["camera_radiance"] = "environment";
-  j["defocus"] = s.defocus;
-  j["mask_rule"] = to_string(s.mask_rule);
-  j["mask_min_change_levels"] = s.mask_min_change_levels;
-  j["mask_threshold"] = s.mask_threshold;
-  j["sampling_margin"] = s.sampling_margin;
-  return j;
-}
+Json lens_droplet_spec_to_json(const LensDropletSpec& s) { return json_fields::write(s, kLensFields); }
 
 }  // namespace weathergs::generator::lens

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "core/rng.h"
@@ -169,20 +170,21 @@ int AefArchitecture::opening_radius_px(int width) const {
   return std::max(1, int(std::lround(opening_radius_px_at_300 * width / 300.0)));
 }
 
-Json AefArchitecture::to_json() const {
-  return {{"channels", channels}, {"bottleneck", bottleneck}, {"residual_blocks", residual_blocks},
-          {"opening_radius_px_at_300", opening_radius_px_at_300}, {"prior_threshold", prior_threshold}, {"prior_gain", prior_gain}};
-}
+namespace {
+constexpr auto kAefArchitectureFields = [](auto& s, auto& f) {  // every key required
+  f("channels", s.channels);
+  f("bottleneck", s.bottleneck);
+  f("residual_blocks", s.residual_blocks);
+  f("opening_radius_px_at_300", s.opening_radius_px_at_300);
+  f("prior_threshold", s.prior_threshold);
+  f("prior_gain", s.prior_gain);
+};
+}  // namespace
+
+Json AefArchitecture::to_json() const { return json_fields::write(*this, kAefArchitectureFields); }
 
 AefArchitecture AefArchitecture::from_json(const JsonReader& r) {
-  AefArchitecture a;
-  a.channels = r.get<int>("channels");
-  a.bottleneck = r.get<int>("bottleneck");
-  a.residual_blocks = r.get<int>("residual_blocks");
-  a.opening_radius_px_at_300 = r.get<double>("opening_radius_px_at_300");
-  a.prior_threshold = r.get<double>("prior_threshold");
-  a.prior_gain = r.get<double>("prior_gain");
-  r.finish();
+  AefArchitecture a = json_fields::read(r, AefArchitecture{}, kAefArchitectureFields, json_fields::Absent::kError);
   a.validate();
   return a;
 }

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "core/rng.h"
@@ -130,17 +131,19 @@ void SelectorArchitecture::validate() const {
     throw InputError("selector architecture tophat_radius_px_at_300", "expected in (0, 64], got " + std::to_string(tophat_radius_px_at_300));
 }
 
-Json SelectorArchitecture::to_json() const {
-  return {{"width", width}, {"channels", channels}, {"embedding", embedding}, {"tophat_radius_px_at_300", tophat_radius_px_at_300}};
-}
+namespace {
+constexpr auto kSelectorArchitectureFields = [](auto& s, auto& f) {  // every key required
+  f("width", s.width);
+  f("channels", s.channels);
+  f("embedding", s.embedding);
+  f("tophat_radius_px_at_300", s.tophat_radius_px_at_300);
+};
+}  // namespace
+
+Json SelectorArchitecture::to_json() const { return json_fields::write(*this, kSelectorArchitectureFields); }
 
 SelectorArchitecture SelectorArchitecture::from_json(const JsonReader& r) {
-  SelectorArchitecture a;
-  a.width = r.get<int>("width");
-  a.channels = r.get<int>("channels");
-  a.embedding = r.get<int>("embedding");
-  a.tophat_radius_px_at_300 = r.get<double>("tophat_radius_px_at_300");
-  r.finish();
+  SelectorArchitecture a = json_fields::read(r, SelectorArchitecture{}, kSelectorArchitectureFields, json_fields::Absent::kError);
   a.validate();
   return a;
 }

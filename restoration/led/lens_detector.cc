@@ -14,6 +14,7 @@
 
 #include "core/atomic_file.h"
 #include "core/error.h"
+#include "core/json_fields.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "core/rng.h"
@@ -234,21 +235,28 @@ LedViewPooling parse_led_view_pooling(const std::string& s, const std::string& w
   throw InputError(where, "expected none, attention or attention+state, got \"" + s + "\"");
 }
 
-Json LedArchitecture::to_json() const {
-  Json j{{"steps", steps}, {"width", width}, {"channels", channels}, {"residual_blocks", residual_blocks}};
-  // Written only when used, so that the JSON of a per-view network reads as before.
-  if (view_pooling != LedViewPooling::kNone) j["view_pooling"] = to_string(view_pooling);
-  return j;
-}
+namespace {
+// Every key required; view_pooling is written only when used, so a per-view network's JSON reads as before.
+constexpr auto kLedArchitectureFields = [](auto& s, auto& f) {
+  f("steps", s.steps);
+  f("width", s.width);
+  f("channels", s.channels);
+  f("residual_blocks", s.residual_blocks);
+  f("view_pooling", s.view_pooling,
+    json_fields::OneOf{LedViewPooling::kNone, LedViewPooling::kAttention, LedViewPooling::kAttentionAndState},
+    json_fields::OmitIf{LedViewPooling::kNone});
+};
+constexpr auto kPeakRuleFields = [](auto& s, auto& f) {
+  f("low", s.low, json_fields::Bounds{0, 1});
+  f("seed", s.seed, json_fields::Bounds{0, 1});
+  f("fraction", s.fraction, json_fields::Bounds{0, 1});
+};
+}  // namespace
+
+Json LedArchitecture::to_json() const { return json_fields::write(*this, kLedArchitectureFields); }
 
 LedArchitecture LedArchitecture::from_json(const JsonReader& r) {
-  LedArchitecture a;
-  a.steps = r.get<int>("steps");
-  a.width = r.get<int>("width");
-  a.channels = r.get<int>("channels");
-  a.residual_blocks = r.get<int>("residual_blocks");
-  if (r.has("view_pooling")) a.view_pooling = parse_led_view_pooling(r.get<std::string>("view_pooling"), "LED architecture view_pooling");
-  r.finish();
+  LedArchitecture a = json_fields::read(r, LedArchitecture{}, kLedArchitectureFields, json_fields::Absent::kError);
   a.validate();
   return a;
 }
@@ -277,14 +285,10 @@ void LedPeakRule::validate() const {
     throw InputError("LED peak rule fraction", "expected in (0, 1], got " + std::to_string(fraction));
 }
 
-Json LedPeakRule::to_json() const { return {{"low", low}, {"seed", seed}, {"fraction", fraction}}; }
+Json LedPeakRule::to_json() const { return json_fields::write(*this, kPeakRuleFields); }
 
 LedPeakRule LedPeakRule::from_json(const JsonReader& r) {
-  LedPeakRule p;
-  p.low = r.get_number("low", 0, 1);
-  p.seed = r.get_number("seed", 0, 1);
-  p.fraction = r.get_number("fraction", 0, 1);
-  r.finish();
+  LedPeakRule p = json_fields::read(r, LedPeakRule{}, kPeakRuleFields, json_fields::Absent::kError);
   p.validate();
   return p;
 }
