@@ -1,9 +1,11 @@
 // weathergs leaderboard: the paper's tables from any number of results files.
 #include <cstdio>
+#include <optional>
 
 #include "apps/command.h"
 #include "core/atomic_file.h"
 #include "evaluator/leaderboard.h"
+#include "evaluator/paper_agreement.h"
 #include "evaluator/paper_tables.h"
 
 namespace weathergs::cli {
@@ -11,17 +13,28 @@ namespace {
 
 struct LeaderboardArgs {
   std::vector<std::string> results;
-  std::string format = "md", output;
+  std::string format = "md", output, against_paper;
   bool paper = false;
 };
 
 int run_leaderboard(const LeaderboardArgs& args) {
   const evaluator::TableFormat format = evaluator::parse_table_format(args.format);
+  std::optional<evaluator::PublishedTables> published;
+  if (!args.against_paper.empty()) {
+    if (format != evaluator::TableFormat::kMarkdown)
+      throw InputError("--against-paper", "the agreement section is Markdown: use --format md");
+    published = evaluator::read_published_tables(args.against_paper);  // before reading every result
+  }
   std::vector<evaluator::LoadedResults> loaded;
   for (const auto& p : args.results) loaded.push_back({p, evaluator::read_results(p)});
-  const std::string text =
-      args.paper ? evaluator::render_paper_tables(evaluator::build_paper_tables(loaded), format)
-                 : evaluator::render_leaderboard(evaluator::build_leaderboard(loaded), format);
+  std::string text;
+  if (args.paper || published) {
+    const evaluator::PaperTables tables = evaluator::build_paper_tables(loaded);
+    text = evaluator::render_paper_tables(tables, format);
+    if (published) text += evaluator::render_agreement(tables, *published);
+  } else {
+    text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded), format);
+  }
   if (args.output.empty() || args.output == "-") {
     std::fputs(text.c_str(), stdout);
   } else {
@@ -39,7 +52,13 @@ Command make_leaderboard(CLI::App& root) {
   sub->add_option("-o,--output", args->output, "Output file (default: stdout)");
   sub->add_flag("--paper", args->paper,
                 "The paper's four tables: I snow, II rain (oracle and gt-masks as reference lines), III the "
-                "ablation averaged over all variants, IV the cost per method (docs/methods.md)");
+                "ablation averaged over all variants, IV the cost per method, then paired differences; seeds "
+                "give mean ± the 95% Student-t interval (docs/evaluator.md)");
+  sub->add_option("--against-paper", args->against_paper,
+                  "With the paper's tables, a section setting them beside the published ones in FILE "
+                  "(benchmarks/paper_tables.json): rankings with Kendall's tau, each reading reproduced or not "
+                  "(implies --paper; Markdown only)")
+      ->check(CLI::ExistingFile);
   return {sub, [args] { return run_leaderboard(*args); }};
 }
 

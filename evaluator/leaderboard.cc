@@ -5,6 +5,8 @@
 #include <map>
 #include <sstream>
 
+#include "evaluator/statistics.h"
+
 namespace weathergs::evaluator {
 
 TableFormat parse_table_format(const std::string& name) {
@@ -38,7 +40,12 @@ CellStats stats(const std::vector<const Results*>& rs) {
   }
   mean_std(p, c.psnr, c.psnr_std);
   mean_std(s, c.ssim, c.ssim_std);
-  if (c.has_lpips) mean_std(l, c.lpips, c.lpips_std);
+  c.psnr_ci = mean_ci95(p).half_width;
+  c.ssim_ci = mean_ci95(s).half_width;
+  if (c.has_lpips) {
+    mean_std(l, c.lpips, c.lpips_std);
+    c.lpips_ci = mean_ci95(l).half_width;
+  }
   return c;
 }
 
@@ -173,7 +180,10 @@ std::string method_label(const LeaderboardTable& t, size_t m) {
 
 bool present(const CellStats& c, int k) { return c.n > 0 && (k != 2 || c.has_lpips); }
 double value(const CellStats& c, int k) { return k == 0 ? c.psnr : k == 1 ? c.ssim : c.lpips; }
-double spread(const CellStats& c, int k) { return k == 0 ? c.psnr_std : k == 1 ? c.ssim_std : c.lpips_std; }
+double spread(const LeaderboardTable& t, const CellStats& c, int k) {
+  if (t.ci95) return k == 0 ? c.psnr_ci : k == 1 ? c.ssim_ci : c.lpips_ci;
+  return k == 0 ? c.psnr_std : k == 1 ? c.ssim_std : c.lpips_std;
+}
 
 // Best = highest PSNR/SSIM, lowest LPIPS, compared at the printed precision so ties are all bold.
 std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
@@ -201,10 +211,10 @@ std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
   return best;
 }
 
-std::string cell_text(const CellStats& c, int k, const char* pm) {
+std::string cell_text(const LeaderboardTable& t, const CellStats& c, int k, const char* pm) {
   if (!present(c, k)) return "";
   std::string s = format_metric(value(c, k), kDecimals[k]);
-  if (c.n > 1) s += std::string(pm) + format_metric(spread(c, k), kDecimals[k]);
+  if (c.n > 1 && std::isfinite(spread(t, c, k))) s += std::string(pm) + format_metric(spread(t, c, k), kDecimals[k]);
   return s;
 }
 
@@ -221,6 +231,8 @@ bool any_repeats(const LeaderboardTable& t) {
   for (const auto& row : t.cells)
     for (const auto& c : row)
       if (c.n > 1) return true;
+  for (const auto& c : t.average)
+    if (c.n > 1) return true;
   return false;
 }
 
@@ -228,7 +240,10 @@ std::string protocol_note(const LeaderboardTable& t) {
   const bool refs = std::find(t.reference.begin(), t.reference.end(), true) != t.reference.end();
   return "Protocol: " + t.protocol.to_string() + ". Best per column in bold" +
          (refs ? " (reference lines excluded)." : ".") +
-         (any_repeats(t) ? " Cells with repeated runs show mean ± standard deviation." : "") + " " + t.average_note;
+         (!any_repeats(t) ? ""
+          : t.ci95 ? " Cells with repeated runs (seeds) show mean ± the half-width of its 95% Student-t interval; "
+                     "an average's interval is over the seeds that ran on every scene, of each seed's mean over scenes."
+                   : " Cells with repeated runs show mean ± standard deviation.") + " " + t.average_note;
 }
 
 void markdown(std::ostringstream& o, const LeaderboardTable& t) {
@@ -242,7 +257,7 @@ void markdown(std::ostringstream& o, const LeaderboardTable& t) {
   for (size_t m = 0; m < t.methods.size(); ++m) {
     o << "| " << method_label(t, m) << " |";
     for (size_t col = 0; col < cols.size(); ++col) {
-      std::string s = cell_text(cell(t, m, col), cols[col].metric, " ± ");
+      std::string s = cell_text(t, cell(t, m, col), cols[col].metric, " ± ");
       if (s.empty()) s = "–";
       else if (best[m][col]) s = "**" + s + "**";
       o << " " << s << " |";
@@ -260,7 +275,7 @@ void csv(std::ostringstream& o, const LeaderboardTable& t, bool header) {
       std::string m = kMetricName[c.metric];
       std::transform(m.begin(), m.end(), m.begin(), ::tolower);
       o << "," << csv_escape(c.group + "_" + m);
-      if (any_repeats(t)) o << "," << csv_escape(c.group + "_" + m + "_std");
+      if (any_repeats(t)) o << "," << csv_escape(c.group + "_" + m + (t.ci95 ? "_ci95" : "_std"));
     }
     o << "\n";
   }
@@ -270,7 +285,7 @@ void csv(std::ostringstream& o, const LeaderboardTable& t, bool header) {
       const CellStats& c = cell(t, m, col);
       const int k = cols[col].metric;
       o << "," << (present(c, k) ? format_metric(value(c, k), 6) : "");
-      if (any_repeats(t)) o << "," << (present(c, k) && c.n > 1 ? format_metric(spread(c, k), 6) : "");
+      if (any_repeats(t)) o << "," << (present(c, k) && c.n > 1 ? format_metric(spread(t, c, k), 6) : "");
     }
     o << "\n";
   }
@@ -294,7 +309,7 @@ void latex(std::ostringstream& o, const LeaderboardTable& t) {
   for (size_t m = 0; m < t.methods.size(); ++m) {
     o << latex_escape(method_label(t, m));
     for (size_t col = 0; col < cols.size(); ++col) {
-      std::string s = cell_text(cell(t, m, col), cols[col].metric, "$\\pm$");
+      std::string s = cell_text(t, cell(t, m, col), cols[col].metric, "$\\pm$");
       if (s == "+inf") s = "$+\\infty$";
       if (s.empty()) s = "--";
       else if (best[m][col]) s = "\\textbf{" + s + "}";
@@ -318,7 +333,7 @@ void html(std::ostringstream& o, const LeaderboardTable& t) {
   for (size_t m = 0; m < t.methods.size(); ++m) {
     o << "<tr><td class=\"method\">" << html_escape(method_label(t, m)) << "</td>";
     for (size_t col = 0; col < cols.size(); ++col) {
-      std::string s = cell_text(cell(t, m, col), cols[col].metric, " &plusmn; ");
+      std::string s = cell_text(t, cell(t, m, col), cols[col].metric, " &plusmn; ");
       if (s.empty()) s = "&ndash;";
       o << (cols[col].metric == 0 ? "<td class=\"first\">" : "<td>") << (best[m][col] ? "<b>" + s + "</b>" : s) << "</td>";
     }

@@ -4,6 +4,7 @@
 // shown with their standard deviation and count.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -24,7 +25,10 @@ struct CellStats {
   int n = 0;
   double psnr = 0, ssim = 0, lpips = 0;
   double psnr_std = 0, ssim_std = 0, lpips_std = 0;
+  // Half-widths of the 95% Student-t intervals of the means (evaluator/statistics.h); NaN when n < 2.
+  double psnr_ci = kNoInterval, ssim_ci = kNoInterval, lpips_ci = kNoInterval;
   bool has_lpips = false;
+  static constexpr double kNoInterval = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct LeaderboardTable {
@@ -39,6 +43,9 @@ struct LeaderboardTable {
   std::vector<bool> reference;
   std::string average_label = "Average";
   std::string average_note = "Average: mean over scenes, only for methods with every scene.";
+  // Cells with repeated runs show ± the 95% t-interval's half-width (the paper tables) instead of ± the
+  // standard deviation.
+  bool ci95 = false;
   Protocol protocol;
 };
 

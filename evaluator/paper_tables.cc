@@ -1,6 +1,8 @@
 #include "evaluator/paper_tables.h"
 
 #include <algorithm>
+#include <filesystem>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -10,6 +12,8 @@
 namespace weathergs::evaluator {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Table III's rows in the paper's order: w/o AEF, w/o LED, full.
@@ -46,6 +50,103 @@ double info_number(const Json& info, const char* key) {
   return info[key].get<double>();
 }
 
+// The seed a result was trained with: method_info.seed, else the workflow's folder name seed<N>
+// (runs/<variant>/<method>/seed<N>/results.json); a result with neither is a seed of its own.
+std::string seed_key(const LoadedResults& lr) {
+  const Json& info = lr.results.method_info;
+  if (info.is_object() && info.contains("seed") && info["seed"].is_number_integer())
+    return std::to_string(info["seed"].get<int64_t>());
+  const std::string folder = fs::path(lr.path).parent_path().filename().string();
+  if (folder.size() > 4 && folder.compare(0, 4, "seed") == 0 &&
+      folder.find_first_not_of("0123456789", 4) == std::string::npos)
+    return std::to_string(std::stoll(folder.substr(4)));
+  return "file:" + lr.path;
+}
+
+std::string scene_of(const Results& r) { return r.scene.empty() ? r.dataset : r.scene; }
+
+double mean_of(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return s / double(v.size());
+}
+
+// PSNR, SSIM and LPIPS (NaN when absent) of a result.
+std::array<double, 3> metrics_of(const Results& r) {
+  return {r.metrics.psnr, r.metrics.ssim, r.metrics.lpips ? *r.metrics.lpips : kNaN};
+}
+
+// The 95% intervals, over the seeds that ran on all `groups` groups (scenes or variants), of each
+// seed's mean over the groups (a group's repeated results of one seed averaged first).
+std::array<MeanInterval, 3> over_seeds(const std::vector<const LoadedResults*>& rs,
+                                       std::string (*group_of)(const Results&), size_t groups) {
+  std::map<std::string, std::map<std::string, std::array<std::vector<double>, 3>>> by_seed;
+  for (const LoadedResults* lr : rs) {
+    auto& v = by_seed[seed_key(*lr)][group_of(lr->results)];
+    const auto m = metrics_of(lr->results);
+    for (int k = 0; k < 3; ++k) v[k].push_back(m[k]);
+  }
+  std::array<std::vector<double>, 3> per_seed;
+  for (const auto& [seed, by_group] : by_seed) {
+    if (by_group.size() != groups) continue;
+    std::array<double, 3> sum{};
+    for (const auto& [group, v] : by_group)
+      for (int k = 0; k < 3; ++k) sum[k] += mean_of(v[k]);
+    for (int k = 0; k < 3; ++k) per_seed[k].push_back(sum[k] / double(groups));
+  }
+  std::array<MeanInterval, 3> out;
+  for (int k = 0; k < 3; ++k) out[k] = mean_ci95(per_seed[k]);
+  return out;
+}
+
+// An average cell gets the interval over seeds when at least two seeds ran on every group.
+void set_seed_interval(CellStats& avg, const std::array<MeanInterval, 3>& ci) {
+  if (avg.n == 0 || ci[0].n < 2) return;
+  avg.n = ci[0].n;
+  avg.psnr_ci = ci[0].half_width;
+  avg.ssim_ci = ci[1].half_width;
+  if (avg.has_lpips) avg.lpips_ci = ci[2].half_width;
+}
+
+// WeatherGS against vanilla 3DGS, each ablation against the full method, and the two differences the
+// paper reads between its baselines (GS-W against 3DGS, DerainNeRF against NeRF).
+const std::pair<const char*, const char*> kComparisons[] = {
+    {"weathergs", "3dgs"},           {"weathergs-no-aef", "weathergs"}, {"weathergs-no-led", "weathergs"},
+    {"gs-w-lite", "3dgs"},           {"derainnerf", "nerf"}};
+
+std::vector<PairedDifference> paired_differences(const std::vector<LoadedResults>& results,
+                                                 const std::vector<std::string>& weathers) {
+  std::vector<PairedDifference> out;
+  for (const auto& [method, baseline] : kComparisons) {
+    std::vector<std::string> groups = weathers;
+    groups.push_back("all");
+    for (const std::string& w : groups) {
+      // (variant, seed) -> that method's metrics (repeats averaged), for the method and the baseline.
+      std::map<std::pair<std::string, std::string>, std::array<std::vector<double>, 3>> a, b;
+      for (const auto& lr : results) {
+        if (w != "all" && lr.results.weather != w) continue;
+        auto* side = lr.results.method == method ? &a : lr.results.method == baseline ? &b : nullptr;
+        if (!side) continue;
+        auto& v = (*side)[{variant_of(lr.results), seed_key(lr)}];
+        const auto m = metrics_of(lr.results);
+        for (int k = 0; k < 3; ++k) v[k].push_back(m[k]);
+      }
+      std::array<std::vector<double>, 3> d;
+      for (const auto& [key, va] : a) {
+        const auto it = b.find(key);
+        if (it == b.end()) continue;
+        for (int k = 0; k < 3; ++k) {
+          const double x = mean_of(va[k]) - mean_of(it->second[k]);
+          if (std::isfinite(x)) d[k].push_back(x);
+        }
+      }
+      if (d[0].empty()) continue;
+      out.push_back({method, baseline, w, mean_ci95(d[0]), mean_ci95(d[1]), mean_ci95(d[2])});
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
@@ -59,7 +160,14 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
     std::string w = t.weather.empty() ? "unspecified weather" : t.weather;
     w[0] = char(std::toupper(static_cast<unsigned char>(w[0])));
     t.title = std::string("Table ") + kRoman[std::min<size_t>(i, 7)] + ": " + w;
+    t.ci95 = true;
     move_references_last(t);
+    for (size_t m = 0; m < t.methods.size(); ++m) {
+      std::vector<const LoadedResults*> rs;
+      for (const auto& lr : results)
+        if (lr.results.weather == t.weather && lr.results.method == t.methods[m]) rs.push_back(&lr);
+      set_seed_interval(t.average[m], over_seeds(rs, scene_of, t.scenes.size()));
+    }
   }
   const std::string table3 = std::string("Table ") + kRoman[std::min<size_t>(out.quality.size(), 7)];
 
@@ -78,6 +186,7 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
   a.average_note = "All variants: the mean over " + std::to_string(variants.size()) +
                    " variants of each variant's mean over seeds, only for methods with every variant.";
   a.protocol = out.quality.empty() ? Protocol{} : out.quality.front().protocol;
+  a.ci95 = true;
   for (const char* m : kAblationMethods) {
     std::map<std::string, std::vector<const Results*>> per_variant;
     for (const auto& lr : results) {
@@ -107,6 +216,10 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
       avg.psnr /= k; avg.ssim /= k; avg.lpips /= k;
       avg.has_lpips = lp;
     }
+    std::vector<const LoadedResults*> rs;
+    for (const auto& lr : results)
+      if (lr.results.method == m) rs.push_back(&lr);
+    set_seed_interval(avg, over_seeds(rs, variant_of, variants.size()));
     a.methods.push_back(m);
     a.cells.emplace_back();
     a.average.push_back(avg);
@@ -146,6 +259,9 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
     mean_std(gaussians, row.gaussians, unused_sd);
     out.cost.push_back(row);
   }
+  std::vector<std::string> weathers;
+  for (const auto& t : out.quality) weathers.push_back(t.weather);
+  out.differences = paired_differences(results, weathers);
   return out;
 }
 
@@ -245,6 +361,75 @@ std::string render_cost(const std::vector<CostRow>& rows, const std::string& tit
   return o.str();
 }
 
+std::string signed_interval(const MeanInterval& d, int decimals, const char* pm) {
+  if (d.n == 0 || !std::isfinite(d.mean)) return "";
+  std::string s = (d.mean >= 0 ? "+" : "") + fixed(d.mean, decimals);
+  if (std::isfinite(d.half_width)) s += pm + fixed(d.half_width, decimals);
+  return s;
+}
+
+const char* kDifferenceNote =
+    "Paired differences: method minus baseline over the (variant, seed) pairs both ran, mean ± the "
+    "half-width of its 95% Student-t interval (none with one pair). PSNR and SSIM: positive = the method "
+    "is better; LPIPS: negative = the method is better.";
+
+std::string render_differences(const std::vector<PairedDifference>& rows, const std::string& title, TableFormat format) {
+  const char* header[] = {"Difference", "Weather", "Pairs", "ΔPSNR (dB)", "ΔSSIM", "ΔLPIPS"};
+  std::ostringstream o;
+  auto cells = [&](const PairedDifference& r, const char* pm) {
+    return std::vector<std::string>{r.method + " − " + r.baseline, r.weather, std::to_string(r.psnr.n),
+                                    signed_interval(r.psnr, 2, pm), signed_interval(r.ssim, 3, pm),
+                                    signed_interval(r.lpips, 3, pm)};
+  };
+  switch (format) {
+    case TableFormat::kMarkdown:
+      o << "## " << title << "\n\n|";
+      for (const char* h : header) o << " " << h << " |";
+      o << "\n|---|---|---:|---:|---:|---:|\n";
+      for (const auto& r : rows) {
+        o << "|";
+        for (const std::string& c : cells(r, " ± ")) o << " " << (c.empty() ? "–" : c) << " |";
+        o << "\n";
+      }
+      o << "\n" << kDifferenceNote << "\n\n";
+      break;
+    case TableFormat::kCsv:
+      o << "method,baseline,weather,pairs,psnr_diff,psnr_ci95,ssim_diff,ssim_ci95,lpips_diff,lpips_ci95\n";
+      for (const auto& r : rows) {
+        o << csv_escape(r.method) << "," << csv_escape(r.baseline) << "," << csv_escape(r.weather) << "," << r.psnr.n;
+        for (const MeanInterval* m : {&r.psnr, &r.ssim, &r.lpips}) o << "," << fixed(m->mean, 6) << "," << fixed(m->half_width, 6);
+        o << "\n";
+      }
+      break;
+    case TableFormat::kLatex:
+      o << "% " << title << ". " << kDifferenceNote << "\n";
+      o << "\\begin{table}[t]\n\\centering\n\\caption{" << latex_escape(title)
+        << "}\n\\begin{tabular}{llrrrr}\n\\toprule\nDifference & Weather & Pairs & $\\Delta$PSNR (dB) & "
+           "$\\Delta$SSIM & $\\Delta$LPIPS \\\\\n\\midrule\n";
+      for (const auto& r : rows) {
+        std::vector<std::string> c = cells(r, "$\\pm$");
+        c[0] = r.method + " -- " + r.baseline;
+        for (size_t i = 0; i < c.size(); ++i)
+          o << (i ? " & " : "") << (c[i].empty() ? "--" : (i == 0 || i == 1 ? latex_escape(c[i]) : c[i]));
+        o << " \\\\\n";
+      }
+      o << "\\bottomrule\n\\end{tabular}\n\\end{table}\n\n";
+      break;
+    case TableFormat::kHtml:
+      o << "<h2>" << html_escape(title) << "</h2>\n<table>\n<thead>\n<tr>";
+      for (const char* h : header) o << "<th>" << html_escape(h) << "</th>";
+      o << "</tr>\n</thead>\n<tbody>\n";
+      for (const auto& r : rows) {
+        o << "<tr>";
+        for (const std::string& c : cells(r, " ± ")) o << "<td>" << (c.empty() ? "&ndash;" : html_escape(c)) << "</td>";
+        o << "</tr>\n";
+      }
+      o << "</tbody>\n</table>\n<p class=\"note\">" << html_escape(kDifferenceNote) << "</p>\n";
+      break;
+  }
+  return o.str();
+}
+
 }  // namespace
 
 std::string render_paper_tables(const PaperTables& t, TableFormat format) {
@@ -264,6 +449,10 @@ std::string render_paper_tables(const PaperTables& t, TableFormat format) {
   }
   separate();
   o += render_cost(t.cost, table4, format);
+  if (!t.differences.empty()) {
+    separate();
+    o += render_differences(t.differences, "Paired differences", format);
+  }
   return o + document_end(format);
 }
 

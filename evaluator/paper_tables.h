@@ -5,13 +5,17 @@
 //   Table IV  computational cost per method: training time, restoration (AEF + LED) time, render
 //             time per view, peak memory, Gaussians.
 // The oracle and gt-masks are reference lines: listed last, marked, never in bold. Repeated runs of
-// one cell (seeds) show mean ± standard deviation.
+// one cell (seeds) show mean ± the half-width of the 95% Student-t interval, and so do averages over
+// scenes when several seeds ran on every scene. A last table gives paired differences (same variant,
+// same seed) with their intervals: WeatherGS - 3DGS, each ablation - the full method, GS-W - 3DGS and
+// DerainNeRF - NeRF.
 #pragma once
 
 #include <string>
 #include <vector>
 
 #include "evaluator/leaderboard.h"
+#include "evaluator/statistics.h"
 
 namespace weathergs::evaluator {
 
@@ -28,11 +32,18 @@ struct CostRow {
   bool reference = false;
 };
 
+// method - baseline over the (variant, seed) pairs both ran, per weather and over all ("all").
+struct PairedDifference {
+  std::string method, baseline, weather;
+  MeanInterval psnr, ssim, lpips;  // lpips.n == 0 when a pair lacks LPIPS
+};
+
 struct PaperTables {
   std::vector<LeaderboardTable> quality;  // Table I (snow), Table II (rain), then any other weather
   LeaderboardTable ablation;              // Table III; no methods when no ablation method ran
   std::vector<std::string> ablation_variants;  // the variants Table III averages over
   std::vector<CostRow> cost;              // Table IV, in the order of the quality tables' rows
+  std::vector<PairedDifference> differences;  // for the comparisons that have pairs
 };
 
 PaperTables build_paper_tables(const std::vector<LoadedResults>& results);

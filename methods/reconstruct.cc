@@ -231,6 +231,7 @@ evaluator::Results evaluate_stage(const Run& run, const std::string& renders_dir
   res.method_info["initialization"] = points.initialization;
   res.method_info["method_description"] = run.method.description;
   res.method_info["weights"] = weights_record(run);
+  res.method_info["seed"] = run.o.train.seed;  // pairs runs across methods (leaderboard --paper)
   // Restoration time is part of a method's cost (Table IV): the AEF's and the LED's own reports.
   auto report_seconds = [&](const fs::path& report) {
     return fs::exists(report) ? read_json_file(report.string()).value("seconds", 0.0) : 0.0;
