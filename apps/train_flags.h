@@ -3,69 +3,104 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.h"
+#include "core/json_reader.h"
 #include "reconstruction/trainer.h"
 
 namespace weathergs::cli {
 
 struct TrainFlags {
+  using TrainOptions = reconstruction::TrainOptions;
   std::string random_init = "photo", mask_normalization = "valid", large_prune = "distance";
   std::vector<double> background;
+  std::string options_file;
 
   // Binds the numeric flags to `train` and `checkpoint_every`; the named choices go through apply().
-  void add_to(CLI::App* app, reconstruction::TrainOptions& train, int& checkpoint_every) {
-    app->add_option("--iterations", train.iterations, "3DGS training iterations")
+  void add_to(CLI::App* app, TrainOptions& train, int& checkpoint_every) {
+    app->add_option("--train-options", options_file,
+                    "TrainOptions as JSON, the keys of run.json's \"options\" (docs/reconstruction.md): a key it "
+                    "leaves out keeps its default, and flags given on the command line override it")
+        ->check(CLI::ExistingFile);
+    field(app, "--iterations", &TrainOptions::iterations, train, "3DGS training iterations")
         ->capture_default_str()->check(CLI::PositiveNumber);
-    app->add_option("--seed", train.seed, "Random seed (view order, random initialization; reconstruct: the radiance field's too)")
+    field(app, "--seed", &TrainOptions::seed, train,
+          "Random seed (view order, random initialization; reconstruct: the radiance field's too)")
         ->capture_default_str();
-    app->add_option("--background", background, "Background colour R G B in [0, 1] (default 0 0 0)")->expected(3);
-    app->add_option("--max-gaussians", train.max_gaussians,
-                    "Memory guard: densification never grows the model beyond this many Gaussians (~2.6 KiB each)")
+    given(app->add_option("--background", background, "Background colour R G B in [0, 1] (default 0 0 0)")->expected(3),
+          &TrainOptions::background);
+    field(app, "--max-gaussians", &TrainOptions::max_gaussians, train,
+          "Memory guard: densification never grows the model beyond this many Gaussians (~2.6 KiB each)")
         ->capture_default_str();
-    app->add_option("--random-init", random_init,
-                    "Random initialization when there are no SfM points: photo (each point at the depth where "
-                    "neighbouring views agree) or frustum (uniform in inverse depth, random colours)")
-        ->capture_default_str()->check(CLI::IsMember({"photo", "frustum"}));
-    app->add_option("--random-init-count", train.random_init_count,
-                    "Gaussians of the random initialization (used when there are no SfM points)")
+    given(app->add_option("--random-init", random_init,
+                          "Random initialization when there are no SfM points: photo (each point at the depth where "
+                          "neighbouring views agree) or frustum (uniform in inverse depth, random colours)")
+              ->capture_default_str()->check(CLI::IsMember({"photo", "frustum"})),
+          &TrainOptions::random_init);
+    field(app, "--random-init-count", &TrainOptions::random_init_count, train,
+          "Gaussians of the random initialization (used when there are no SfM points)")
         ->capture_default_str();
-    app->add_option("--mask-normalization", mask_normalization,
-                    "Masked loss: valid (means over the valid pixels, masked ones count for nothing) or reference "
-                    "(the WeatherGS release: masked target pixels replaced by the render, means over all pixels); "
-                    "docs/reconstruction.md")
-        ->capture_default_str()->check(CLI::IsMember({"valid", "reference"}));
-    app->add_option("--large-prune", large_prune,
-                    "Large-Gaussian prune (from --large-prune-from on): distance (a Gaussian may be up to "
-                    "max_world_size x the larger of the cameras' extent and its distance from the rig) or "
-                    "camera_extent (the reference: max_world_size x the cameras' extent; collapses forward-facing "
-                    "scenes at 30,000 iterations); docs/reconstruction.md")
-        ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"}));
-    app->add_option("--large-prune-from", train.large_prune_from,
-                    "Iteration after which the large-Gaussian prune runs (at densification steps); the default, "
-                    "the reference's first opacity reset, is scaled with --iterations like the densification window")
+    given(app->add_option("--mask-normalization", mask_normalization,
+                          "Masked loss: valid (means over the valid pixels, masked ones count for nothing) or reference "
+                          "(the WeatherGS release: masked target pixels replaced by the render, means over all pixels); "
+                          "docs/reconstruction.md")
+              ->capture_default_str()->check(CLI::IsMember({"valid", "reference"})),
+          &TrainOptions::mask_normalization);
+    given(app->add_option("--large-prune", large_prune,
+                          "Large-Gaussian prune (from --large-prune-from on): distance (a Gaussian may be up to "
+                          "max_world_size x the larger of the cameras' extent and its distance from the rig) or "
+                          "camera_extent (the reference: max_world_size x the cameras' extent; collapses forward-facing "
+                          "scenes at 30,000 iterations); docs/reconstruction.md")
+              ->capture_default_str()->check(CLI::IsMember({"distance", "camera_extent"})),
+          &TrainOptions::large_prune);
+    field(app, "--large-prune-from", &TrainOptions::large_prune_from, train,
+          "Iteration after which the large-Gaussian prune runs (at densification steps); the default, "
+          "the reference's first opacity reset, is scaled with --iterations like the densification window")
         ->capture_default_str()->check(CLI::NonNegativeNumber);
-    app->add_option("--distractor-opacity-weight", train.distractor_opacity_weight,
-                    "desplat: opacity penalty of the per-view distractor Gaussians: the loss gains this x the image "
-                    "fraction their opacity covers (docs/reconstruction.md)")
+    field(app, "--distractor-opacity-weight", &TrainOptions::distractor_opacity_weight, train,
+          "desplat: opacity penalty of the per-view distractor Gaussians: the loss gains this x the image "
+          "fraction their opacity covers (docs/reconstruction.md)")
         ->capture_default_str()->check(CLI::NonNegativeNumber);
     app->add_option("--checkpoint-every", checkpoint_every, "Iterations between checkpoints (0 = only at the end)")
         ->capture_default_str()->check(CLI::NonNegativeNumber);
   }
 
-  // The named choices and the background, after parsing.
-  void apply(reconstruction::TrainOptions& train) const {
-    train.random_init = random_init == "frustum" ? reconstruction::TrainOptions::RandomInit::kFrustum
-                                                 : reconstruction::TrainOptions::RandomInit::kPhotoConsistent;
-    train.mask_normalization =
+  // After parsing: the options file under the flags given, then the named choices and the background.
+  void apply(TrainOptions& train) const {
+    TrainOptions parsed = train;
+    parsed.random_init = random_init == "frustum" ? TrainOptions::RandomInit::kFrustum : TrainOptions::RandomInit::kPhotoConsistent;
+    parsed.mask_normalization =
         mask_normalization == "reference" ? reconstruction::MaskNormalization::kReference : reconstruction::MaskNormalization::kValid;
-    train.large_prune = reconstruction::parse_large_prune(large_prune, "--large-prune");
+    parsed.large_prune = reconstruction::parse_large_prune(large_prune, "--large-prune");
     if (!background.empty()) {
       if (background.size() != 3) throw InputError("--background", "expected 3 values (R G B in [0, 1])");
-      for (int c = 0; c < 3; ++c) train.background[c] = background[c];
+      for (int c = 0; c < 3; ++c) parsed.background[c] = background[c];
     }
+    if (options_file.empty()) {
+      train = parsed;
+      return;
+    }
+    train = TrainOptions::from_json(JsonReader::from_file(options_file));
+    for (const auto& [option, copy] : copies_)
+      if (option->count() > 0) copy(parsed, train);
+  }
+
+ private:
+  // Each flag that sets a TrainOptions field, with the copy of that field a given flag makes.
+  std::vector<std::pair<CLI::Option*, std::function<void(const TrainOptions&, TrainOptions&)>>> copies_;
+
+  template <typename T>
+  CLI::Option* given(CLI::Option* option, T TrainOptions::*member) {
+    copies_.push_back({option, [member](const TrainOptions& from, TrainOptions& to) { to.*member = from.*member; }});
+    return option;
+  }
+  template <typename T>
+  CLI::Option* field(CLI::App* app, const char* name, T TrainOptions::*member, TrainOptions& train, const char* help) {
+    return given(app->add_option(name, train.*member, help), member);
   }
 };
 

@@ -7,6 +7,7 @@
 #include "core/atomic_file.h"
 #include "core/json_reader.h"
 #include "reconstruction/gaussians.h"
+#include "reconstruction/trainer.h"
 #include "tests/core/test_util.h"
 #include "tests/reconstruction/test_scene.h"
 
@@ -71,6 +72,28 @@ TEST(CliTest, TrainResumeRender) {
   EXPECT_FALSE(fs::exists(dir / "r4"));
   EXPECT_EQ(run("render --model " + runp + " --split nope --out " + dir / "r5"), 2);
   EXPECT_FALSE(fs::exists(dir / "r5"));
+}
+
+TEST(CliTest, TrainOptionsFileUnderTheGivenFlags) {
+  weathergs::testing::TempDir dir;
+  const GaussianSet<float> truth = testing::random_gaussians<float>(60, 2, 1.0, 0.12, 0.0);
+  testing::write_synthetic_dataset(dir / "data", truth, testing::ring_cameras(6, 32, 24, 30, 4.0), true);
+  const std::string data = dir / "data", file = dir / "options.json";
+  write_file_atomic(file, R"({"iterations": 30, "densify_until": 20, "lambda_dssim": 0.5, "random_init": "frustum"})");
+  // The file's keys, a flag given on the command line over it, the rest at their defaults.
+  ASSERT_EQ(run("train --data " + data + " --train-options " + file + " --iterations 24 --out " + dir / "run"), 0);
+  const JsonReader o = JsonReader::from_file(dir / "run" + "/run.json").child("options");
+  EXPECT_EQ(o.get<int>("iterations"), 24);
+  EXPECT_EQ(o.get<int>("densify_until"), 20);
+  EXPECT_DOUBLE_EQ(o.get<double>("lambda_dssim"), 0.5);
+  EXPECT_EQ(o.get<std::string>("random_init"), "frustum");
+  EXPECT_EQ(o.get<int>("densify_from"), TrainOptions{}.densify_from);
+  // A misspelled key or a bad value is an error before training.
+  write_file_atomic(file, R"({"densify_untill": 20})");
+  EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r2"), 2);
+  write_file_atomic(file, R"({"iterations": 0})");
+  EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r3"), 2);
+  EXPECT_FALSE(fs::exists(dir / "r2"));
 }
 
 TEST(CliTest, MaskAndImageFolders) {

@@ -6,6 +6,8 @@
 # - CELL = <data>:<method>:<iterations>: a tuning run of the run-length-scaled schedule at that length,
 #   with snapshots at fifths of the run; writes benchmarks/baselines/convergence/tuning/<data>_<method>_<iterations>.json.
 #   Tuning scenes only (make_tuning_scenes.sh), never benchmark scenes.
+# - CELL = <data>:<method>:<iterations>:<options.json>: the same with `--train-options options.json` (a
+#   candidate schedule), named <data>_<method>_<iterations>_<options file stem>.
 # Resumable: a run stopped part way resumes from its last checkpoint when the script runs again (the
 # checkpoint keeps the training seconds, so they stay the training time of one uninterrupted run).
 # Usage: reference_runs.sh WEATHERGS_BINARY DATA_DIR RUNS_DIR CELL...
@@ -19,17 +21,18 @@ DATA=$(realpath "$2"); RUNS=$(realpath -m "$3"); shift 3
 DST="$ROOT/benchmarks/baselines/convergence"
 mkdir -p "$RUNS" "$DST/tuning"
 for cell in "$@"; do
-  IFS=: read -r data method iterations <<<"$cell"
+  IFS=: read -r data method iterations options <<<"$cell"
   if [ -z "$iterations" ]; then
     name="${data}_${method}"; dst="$DST/$name.json"; iterations=30000
     eval_at=500,1000,2000,3000,5000,7000,10000,15000,20000,25000
   else
-    name="${data}_${method}_${iterations}"; dst="$DST/tuning/$name.json"
+    name="${data}_${method}_${iterations}${options:+_$(basename "$options" .json)}"; dst="$DST/tuning/$name.json"
     eval_at=$((iterations / 5)),$((2 * iterations / 5)),$((3 * iterations / 5)),$((4 * iterations / 5))
   fi
   out="$RUNS/$name"
   cmd=("$BIN" --quiet --threads 1 reconstruct --data "$DATA/$data" --method "$method" --iterations "$iterations"
        --eval-at "$eval_at" --checkpoint-every 500 --seed 0 --out "$out")
+  [ -z "${options:-}" ] || cmd+=(--train-options "$(realpath "$options")")
   if [ ! -f "$out/results.json" ]; then
     echo "== $name: ${cmd[*]}"
     "${cmd[@]}"
