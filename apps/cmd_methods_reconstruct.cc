@@ -6,9 +6,11 @@
 #include "apps/evaluator_flags.h"
 #include "apps/resources.h"
 #include "apps/train_flags.h"
+#include "core/dataset.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "methods/reconstruct.h"
+#include "reconstruction/run.h"
 
 namespace weathergs::cli {
 namespace {
@@ -31,6 +33,8 @@ int run(ReconstructArgs& a) {
   o.points = a.no_triangulate ? methods::PointsPolicy::kDataset : methods::PointsPolicy::kAuto;
   o.scoring = a.scoring.options();
   a.train.apply(o.train);
+  // The run's length is known before it starts (the progress bar's total); reconstruct() resolves the same.
+  if (!o.dataset.empty()) o.train = reconstruction::run_length_for(o.train, read_dataset(o.dataset));
   const methods::Recipe& recipe = methods::spec(o.method).recipe;
   if (recipe.needs_led_weights()) o.led_weights = find_led_weights(a.led_weights);
   if (recipe.needs_aef_weights()) o.aef_weights = find_aef_weights(a.aef_weights);

@@ -3,6 +3,7 @@
 
 #include "apps/command.h"
 #include "apps/train_flags.h"
+#include "core/dataset.h"
 #include "core/progress.h"
 #include "reconstruction/run.h"
 
@@ -33,6 +34,7 @@ int run_train(TrainArgs& args) {
     if (!given("--masks-dir")) o.inputs.masks_dir = stored.inputs.masks_dir;
     if (!given("--points-dir")) o.inputs.points_dir = stored.inputs.points_dir;
     if (!given("--iterations")) o.train.iterations = stored.train.iterations;
+    if (!given("--schedule")) o.train.schedule = stored.train.schedule;
     if (!given("--seed")) o.train.seed = stored.train.seed;
     if (!given("--background")) o.train.background = stored.train.background;
     if (!given("--random-init-count")) o.train.random_init_count = stored.train.random_init_count;
@@ -48,6 +50,7 @@ int run_train(TrainArgs& args) {
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
+  o.train = reconstruction::run_length_for(o.train, read_dataset(o.dataset));
   ProgressBar bar("train", o.train.iterations);
   double psnr_ema = 0;
   int reported = 0;

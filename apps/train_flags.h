@@ -16,7 +16,7 @@ namespace weathergs::cli {
 
 struct TrainFlags {
   using TrainOptions = reconstruction::TrainOptions;
-  std::string random_init = "photo", mask_normalization = "valid", large_prune = "distance";
+  std::string random_init = "photo", mask_normalization = "valid", large_prune = "distance", schedule = "fast";
   std::vector<double> background;
   std::string options_file;
 
@@ -26,15 +26,24 @@ struct TrainFlags {
                     "TrainOptions as JSON, the keys of run.json's \"options\" (docs/reconstruction.md): a key it "
                     "leaves out keeps its default, and flags given on the command line override it")
         ->check(CLI::ExistingFile);
-    field(app, "--iterations", &TrainOptions::iterations, train, "3DGS training iterations")
-        ->capture_default_str()->check(CLI::PositiveNumber);
+    field(app, "--iterations", &TrainOptions::iterations, train,
+          "3DGS training iterations (default: the schedule's length; fast: 500 passes over the training views "
+          "within 3000..30000, reference: 30000)")
+        ->check(CLI::PositiveNumber);
+    given(app->add_option("--schedule", schedule,
+                          "fast (a length from the training views, a Gaussian budget of 2 per pixel), reference "
+                          "(the protocol's 30,000-iteration schedule, scaled to a shorter --iterations) or unscaled "
+                          "(every count as given); docs/reconstruction.md")
+              ->capture_default_str()->check(CLI::IsMember({"fast", "reference", "unscaled"})),
+          &TrainOptions::schedule);
     field(app, "--seed", &TrainOptions::seed, train,
           "Random seed (view order, random initialization; reconstruct: the radiance field's too)")
         ->capture_default_str();
     given(app->add_option("--background", background, "Background colour R G B in [0, 1] (default 0 0 0)")->expected(3),
           &TrainOptions::background);
     field(app, "--max-gaussians", &TrainOptions::max_gaussians, train,
-          "Memory guard: densification never grows the model beyond this many Gaussians (~2.6 KiB each)")
+          "Memory guard: densification never grows the model beyond this many Gaussians (~2.6 KiB each; "
+          "the fast schedule's budget, 2 per pixel of a training image, caps the default)")
         ->capture_default_str();
     given(app->add_option("--random-init", random_init,
                           "Random initialization when there are no SfM points: photo (each point at the depth where "
@@ -76,6 +85,7 @@ struct TrainFlags {
     parsed.mask_normalization =
         mask_normalization == "reference" ? reconstruction::MaskNormalization::kReference : reconstruction::MaskNormalization::kValid;
     parsed.large_prune = reconstruction::parse_large_prune(large_prune, "--large-prune");
+    parsed.schedule = reconstruction::parse_schedule(schedule, "--schedule");
     if (!background.empty()) {
       if (background.size() != 3) throw InputError("--background", "expected 3 values (R G B in [0, 1])");
       for (int c = 0; c < 3; ++c) parsed.background[c] = background[c];

@@ -10,6 +10,7 @@
 #include "restoration/led/detect_dataset.h"
 #include "restoration/aef/filter_dataset.h"
 #include "methods/backend.h"
+#include "reconstruction/run.h"
 
 namespace weathergs::methods {
 
@@ -289,11 +290,14 @@ void ReconstructOptions::validate() const {
                                                 " needs the Lens Effect Detector's weights (--led-weights)");
 }
 
-ReconstructResult reconstruct(const ReconstructOptions& o, const reconstruction::IterationCallback& on_iteration,
+ReconstructResult reconstruct(const ReconstructOptions& given, const reconstruction::IterationCallback& on_iteration,
                               const StageCallback& on_stage) {
-  o.validate();
-  check_resources(o);
-  const Dataset ds = read_dataset(o.dataset);
+  given.validate();
+  check_resources(given);
+  const Dataset ds = read_dataset(given.dataset);
+  // The run's length and budget for this dataset: snapshots, records and staleness all use them.
+  ReconstructOptions o = given;
+  o.train = reconstruction::run_length_for(given.train, ds);
   open_run_folder(o);
   const Run run{o, spec(o.method), ds, fs::path(o.out), on_stage};
   ReconstructResult out;

@@ -179,6 +179,17 @@ GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& 
   return init_random(train_views, options);
 }
 
+TrainOptions run_length_for(const TrainOptions& train, const Dataset& dataset) {
+  const std::vector<std::string>& names = dataset.split("train");
+  if (names.empty()) throw InputError(dataset.root, "has no training views");
+  int64_t pixels = 0;
+  for (const std::string& n : names) {
+    const Camera& c = dataset.camera(n);
+    pixels = std::max(pixels, int64_t(c.width) * c.height);
+  }
+  return train.with_run_length(int(names.size()), pixels);
+}
+
 StageOutput run_output(const std::string& run_dir, const TrainOptions& train) {
   StageOutput s;
   s.record = (fs::path(run_dir) / "run.json").string();
@@ -195,9 +206,11 @@ StageOutput run_output(const std::string& run_dir, const TrainOptions& train) {
   return s;
 }
 
-TrainRunResult train_run(const TrainRunOptions& o, const IterationCallback& on_iteration) {
-  o.validate();
-  const Dataset dataset = read_dataset(o.dataset);
+TrainRunResult train_run(const TrainRunOptions& given, const IterationCallback& on_iteration) {
+  given.validate();
+  const Dataset dataset = read_dataset(given.dataset);
+  TrainRunOptions o = given;
+  o.train = run_length_for(given.train, dataset);
   std::vector<TrainView> views = load_train_views(dataset, o.inputs);
   std::vector<Camera> cams;
   for (const TrainView& v : views) cams.push_back(v.camera);

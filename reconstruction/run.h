@@ -64,6 +64,10 @@ struct TrainRunResult {
   double train_seconds = 0, final_loss = 0, final_psnr = 0, peak_rss_mb = 0;
 };
 
+// `train` with its length and budget resolved for the dataset's training views
+// (TrainOptions::with_run_length): what a run of these options records and trains with.
+TrainOptions run_length_for(const TrainOptions& train, const Dataset& dataset);
+
 // The options a run folder was trained with (from its run.json), for --resume.
 TrainRunOptions read_run_options(const std::string& run_dir);
 

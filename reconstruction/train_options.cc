@@ -18,7 +18,7 @@ void TrainOptions::validate(const std::string& where) const {
   auto positive = [&](const char* name, double v) {
     if (!(v > 0) || !std::isfinite(v)) fail(name, std::to_string(v), "must be a positive finite number");
   };
-  if (iterations < 1) fail("iterations", std::to_string(iterations), "must be >= 1");
+  if (iterations < 0) fail("iterations", std::to_string(iterations), "must be >= 1, or 0 for the schedule's length");
   positive("position_lr_init", position_lr_init);
   positive("position_lr_final", position_lr_final);
   positive("feature_lr", feature_lr);
@@ -88,7 +88,11 @@ constexpr auto kFields = [](auto& s, auto& f) {
   f("densification_interval", s.densification_interval);
   f("densify_grad_threshold", s.densify_grad_threshold);
   f("opacity_reset_interval", s.opacity_reset_interval);
-  f("schedule", s.schedule, OneOf{Schedule::kReference, Schedule::kScaled});
+  f.custom(
+      "schedule", [&] { return Json(to_string(s.schedule)); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (r.has(k)) s.schedule = parse_schedule(r.get<std::string>(k), r.where(k));
+      });
   f("min_opacity", s.min_opacity);
   f("max_screen_size_px", s.max_screen_size_px);
   f("max_world_size", s.max_world_size);
@@ -137,18 +141,50 @@ TrainOptions::LargePrune parse_large_prune(const std::string& s, const std::stri
 }
 
 const char* to_string(TrainOptions::Schedule s) {
-  return s == TrainOptions::Schedule::kScaled ? "scaled" : "reference";
+  switch (s) {
+    case TrainOptions::Schedule::kFast: return "fast";
+    case TrainOptions::Schedule::kReference: return "reference";
+    case TrainOptions::Schedule::kUnscaled: return "unscaled";
+  }
+  return "?";
+}
+
+TrainOptions::Schedule parse_schedule(const std::string& s, const std::string& where) {
+  using S = TrainOptions::Schedule;
+  for (S v : {S::kFast, S::kReference, S::kUnscaled})
+    if (s == to_string(v)) return v;
+  // Records written before the fast schedule called the reference's scaled form "scaled".
+  if (s == "scaled") return S::kReference;
+  throw InputError(where, "expected fast, reference or unscaled, got '" + s + "'");
+}
+
+TrainOptions TrainOptions::with_run_length(int views, int64_t pixels) const {
+  WGS_CHECK(views > 0 && pixels > 0);
+  constexpr int kReferenceIterations = 30000, kRound = 100;
+  TrainOptions o = *this;
+  if (iterations == 0) {
+    if (schedule == Schedule::kFast) {
+      const int passes = (kFastEpochs * views + kRound - 1) / kRound * kRound;
+      o.iterations = std::clamp(passes, kFastMinIterations, kReferenceIterations);
+    } else {
+      o.iterations = kReferenceIterations;
+    }
+  }
+  if (schedule == Schedule::kFast && max_gaussians == TrainOptions().max_gaussians)
+    o.max_gaussians = std::min(max_gaussians, int64_t(std::llround(kFastGaussiansPerPixel * double(pixels))));
+  return o;
 }
 
 TrainOptions TrainOptions::effective() const {
   constexpr int kReferenceIterations = 30000;
   constexpr int kResetsPerDensification = 30;  // reference: reset every 3000, densify every 100
   TrainOptions e = *this;
+  WGS_CHECK(iterations > 0);  // with_run_length() resolves 0 before training
   const TrainOptions ref;
   // Robust runs never reset opacity (the reference's robust loss skips it), unless set by hand.
   if (robust != Robust::kNone && opacity_reset_interval == ref.opacity_reset_interval)
     e.opacity_reset_interval = std::numeric_limits<int>::max();
-  if (schedule != Schedule::kScaled || iterations >= kReferenceIterations) return e;
+  if (schedule == Schedule::kUnscaled || iterations >= kReferenceIterations) return e;
   const double s = double(iterations) / kReferenceIterations;
   // Only fields still at the reference's value are scaled: a value set by hand is taken as given.
   auto scaled = [&](int v, int reference, int floor) {

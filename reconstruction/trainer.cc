@@ -60,10 +60,13 @@ double scene_extent(const std::vector<Camera>& cameras) {
 // Trainer
 
 Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const TrainOptions& options, double extent)
-    : views_(std::move(views)), requested_(options), options_(options.effective()), extent_(extent),
-      g_(std::move(initial)) {
+    : views_(std::move(views)), extent_(extent), g_(std::move(initial)) {
   options.validate("train options");
   WGS_CHECK(!views_.empty());
+  int64_t pixels = 0;
+  for (const TrainView& v : views_) pixels = std::max(pixels, int64_t(v.camera.width) * v.camera.height);
+  requested_ = options.with_run_length(int(views_.size()), pixels);
+  options_ = requested_.effective();
   WGS_CHECK(extent_ > 0);
   for (const TrainView& v : views_) {
     WGS_CHECK_EQ(v.rgb.size(), size_t(v.camera.width) * v.camera.height * 3);

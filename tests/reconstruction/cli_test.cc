@@ -91,7 +91,7 @@ TEST(CliTest, TrainOptionsFileUnderTheGivenFlags) {
   // A misspelled key or a bad value is an error before training.
   write_file_atomic(file, R"({"densify_untill": 20})");
   EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r2"), 2);
-  write_file_atomic(file, R"({"iterations": 0})");
+  write_file_atomic(file, R"({"iterations": -1})");
   EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r3"), 2);
   EXPECT_FALSE(fs::exists(dir / "r2"));
 }

@@ -1,5 +1,5 @@
-// A 3000-iteration run end to end (train_run, render_run) with the scaled and with the reference
-// schedule: the reference one ends on an opacity reset. Slow (~40-75 s on 2 cores): label slow; the
+// A 3000-iteration run end to end (train_run, render_run) with the reference schedule scaled to it
+// and with its counts unscaled: the unscaled one ends on an opacity reset. Slow (~40-75 s on 2 cores): label slow; the
 // schedule arithmetic itself is tested in schedule_test.cc.
 #include <gtest/gtest.h>
 
@@ -46,8 +46,8 @@ TEST(Schedule, ShortRunDoesNotEndOnAReset) {
   // 3000 iterations, the README's example: the reference schedule resets opacity at iteration 3000,
   // the last one. Bars: the scaled run must be a sensible reconstruction (25 dB) and far better than
   // the reset one (10 dB).
-  const double scaled = test_psnr(TrainOptions::Schedule::kScaled, "scaled");
-  const double reference = test_psnr(TrainOptions::Schedule::kReference, "reference");
+  const double scaled = test_psnr(TrainOptions::Schedule::kReference, "scaled");
+  const double reference = test_psnr(TrainOptions::Schedule::kUnscaled, "reference");
   std::printf("3000-iteration run, test PSNR: scaled schedule %.2f dB, reference schedule %.2f dB\n", scaled,
               reference);
   EXPECT_GT(scaled, 25.0);

@@ -1,5 +1,6 @@
-// The iteration schedule scales with the run length: a short run never ends on an opacity reset
-// (`train --iterations 3000` must not end right after one, which renders nearly black).
+// The iteration schedules: the reference's scales with the run length, so a short run never ends on
+// an opacity reset (`train --iterations 3000` must not end right after one, which renders nearly
+// black); the fast one takes its length and Gaussian budget from the training data.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@ namespace {
 
 TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
   TrainOptions o;
+  o.schedule = TrainOptions::Schedule::kReference;
   o.iterations = 3000;
   const TrainOptions e = o.effective();
   EXPECT_EQ(e.densify_from, 50);
@@ -51,13 +53,70 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
   o.iterations = 30000;
   EXPECT_EQ(o.effective().to_json(), o.to_json());
   o.iterations = 3000;
-  o.schedule = TrainOptions::Schedule::kReference;
+  o.schedule = TrainOptions::Schedule::kUnscaled;
   EXPECT_EQ(o.effective().to_json(), o.to_json());
   // A value set by hand is kept.
-  o.schedule = TrainOptions::Schedule::kScaled;
+  o.schedule = TrainOptions::Schedule::kReference;
   o.opacity_reset_interval = 100000;
   EXPECT_EQ(o.effective().opacity_reset_interval, 100000);
   EXPECT_EQ(o.effective().densify_until, 1500);
+}
+
+// The fast schedule (the default): the reference's form scaled to a length from the number of
+// training views, with a Gaussian budget from the image size. --iterations overrides the length.
+TEST(Schedule, FastLengthAndBudgetComeFromTheTrainingData) {
+  using S = TrainOptions::Schedule;
+  TrainOptions o;
+  ASSERT_EQ(o.schedule, S::kFast);
+  ASSERT_EQ(o.iterations, 0);
+  const int64_t quick = 300 * 200, paper = 600 * 400;
+  // 500 passes over the views, rounded up to 100, within [3000, 30000].
+  EXPECT_EQ(o.with_run_length(14, quick).iterations, 7000);    // quick profile
+  EXPECT_EQ(o.with_run_length(34, paper).iterations, 17000);   // paper profile
+  EXPECT_EQ(o.with_run_length(3, quick).iterations, 3000);
+  EXPECT_EQ(o.with_run_length(15, quick).iterations, 7500);
+  EXPECT_EQ(o.with_run_length(200, paper).iterations, 30000);
+  // The budget: 2 Gaussians per pixel of the largest training image, under the memory guard.
+  EXPECT_EQ(o.with_run_length(14, quick).max_gaussians, 120000);
+  EXPECT_EQ(o.with_run_length(34, paper).max_gaussians, 480000);
+  EXPECT_EQ(o.with_run_length(34, int64_t(4000) * 3000).max_gaussians, TrainOptions().max_gaussians);
+  // Explicit values are kept; a resolved set resolves to itself.
+  TrainOptions given = o;
+  given.iterations = 1234;
+  given.max_gaussians = 5000;
+  EXPECT_EQ(given.with_run_length(14, quick).to_json(), given.to_json());
+  const TrainOptions r = o.with_run_length(14, quick);
+  EXPECT_EQ(r.with_run_length(14, quick).to_json(), r.to_json());
+  // The others take the reference's 30000 and no budget.
+  for (S s : {S::kReference, S::kUnscaled}) {
+    TrainOptions x;
+    x.schedule = s;
+    EXPECT_EQ(x.with_run_length(14, quick).iterations, 30000);
+    EXPECT_EQ(x.with_run_length(14, quick).max_gaussians, TrainOptions().max_gaussians);
+  }
+  // At any length fast densifies as the reference scaled to it, and never ends on a reset: its
+  // last reset leaves at least half the run to recover.
+  for (int views : {3, 9, 14, 34, 60}) {
+    TrainOptions f = o.with_run_length(views, quick), ref = f;
+    ref.schedule = S::kReference;
+    ref.max_gaussians = f.max_gaussians;
+    EXPECT_EQ(f.effective().to_json().dump(), [&] {
+      Json j = ref.effective().to_json();
+      j["schedule"] = "fast";
+      return j.dump();
+    }()) << views;
+    const TrainOptions e = f.effective();
+    const int last_reset = ((e.densify_until - 1) / e.opacity_reset_interval) * e.opacity_reset_interval;
+    EXPECT_LE(last_reset, f.iterations / 2) << views;
+  }
+  // Names, and the name reference had before fast existed.
+  EXPECT_EQ(parse_schedule("fast", "x"), S::kFast);
+  EXPECT_EQ(parse_schedule("scaled", "x"), S::kReference);
+  EXPECT_EQ(parse_schedule("unscaled", "x"), S::kUnscaled);
+  EXPECT_THROW(parse_schedule("quick", "--schedule"), InputError);
+  Json old = TrainOptions().to_json();
+  old["schedule"] = "scaled";
+  EXPECT_EQ(TrainOptions::from_json(JsonReader(old, "x")).schedule, S::kReference);
 }
 
 }  // namespace

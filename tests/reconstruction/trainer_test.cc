@@ -172,6 +172,35 @@ TEST(TrainerTest, MaxGaussiansCapsDensificationDeterministically) {
   EXPECT_THROW(bad.validate("x"), InputError);
 }
 
+// The fast schedule's Gaussian budget (2 per pixel) binds on small images, with the same bits on 1
+// and 2 threads, and a run resumed from a checkpoint ends with the uninterrupted run's model.
+TEST(TrainerTest, FastBudgetBindsDeterministicallyAndResumes) {
+  Scene s = make_scene(150, 14, 10, 4);  // 140 pixels: a budget of 280 Gaussians
+  weathergs::testing::TempDir dir;
+  const double extent = scene_extent(cameras_of(s.views));
+  TrainOptions o = busy_options(60);
+  ASSERT_EQ(o.schedule, TrainOptions::Schedule::kFast);
+  auto run = [&](int threads, int stop_at, const std::string& resume_from) {
+    set_num_threads(threads);
+    Trainer t(s.views, point_init(s.truth, 2), o, extent);
+    if (!resume_from.empty()) t.load_checkpoint(resume_from);
+    while (t.iteration() < stop_at) t.step();
+    return t;
+  };
+  const Trainer one = run(1, 60, "");
+  EXPECT_EQ(one.options().max_gaussians, 280);
+  EXPECT_GT(one.densify_capped(), 0);  // the budget bound
+  EXPECT_LE(one.gaussians().size(), 280u);
+  const Trainer two = run(2, 60, "");
+  EXPECT_EQ(one.gaussians().position, two.gaussians().position);
+  EXPECT_EQ(one.gaussians().sh, two.gaussians().sh);
+  run(1, 31, "").save_checkpoint(dir / "ckpt.bin", 1.0);
+  const Trainer resumed = run(2, 60, dir / "ckpt.bin");
+  set_num_threads(0);
+  EXPECT_EQ(one.gaussians().position, resumed.gaussians().position);
+  EXPECT_EQ(one.gaussians().opacity_logit, resumed.gaussians().opacity_logit);
+}
+
 // The large-Gaussian prune (after large_prune_from): with kCameraExtent (the reference) a Gaussian
 // larger than max_world_size x the cameras' extent goes wherever it is; with kDistance (default) the
 // limit grows with its distance from the rig, so a large Gaussian far away (the sky, a distant
@@ -197,7 +226,7 @@ TEST(TrainerTest, LargePruneByDistanceKeepsFarLargeGaussians) {
   auto survivors = [&](TrainOptions::LargePrune mode) {
     TrainOptions o;
     o.iterations = 2;
-    o.schedule = TrainOptions::Schedule::kReference;
+    o.schedule = TrainOptions::Schedule::kUnscaled;
     o.densify_from = 1;  // densify (and prune) at iteration 2, after large_prune_from
     o.densification_interval = 2;
     o.large_prune_from = 1;
@@ -564,7 +593,7 @@ TEST(InitTest, RandomInitFillsTheViewFrustaAndExtentFollowsTheReference) {
 
 TEST(TrainerTest, OptionsAreValidated) {
   TrainOptions o;
-  o.iterations = 0;
+  o.iterations = -1;
   EXPECT_THROW(o.validate("x"), InputError);
   o = TrainOptions{};
   o.background = {0, 2, 0};

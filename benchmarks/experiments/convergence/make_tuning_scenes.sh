@@ -3,7 +3,7 @@
 # benchmark scenes), quick profile, with the benchmark's paper-style heavy rain with lens drops and
 # heavy snow (the weather of pool's variants). Settings are chosen on these; the benchmark cells are
 # read once afterwards.
-# Usage: make_tuning_scenes.sh WEATHERGS_BINARY OUT_DIR [CACHE_DIR]
+# Usage: [SCENES="village"] make_tuning_scenes.sh WEATHERGS_BINARY OUT_DIR [CACHE_DIR]
 # Writes OUT_DIR/{station,village}_{rain,snow}/ with sparse/0 (weathered views) and sparse_clean/0.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
@@ -18,7 +18,7 @@ J
 cat > "$OUT/snow.json" <<'J'
 {"seed": 7, "style": "paper", "effects": {"snow": {"intensity": "heavy", "wind_m_s": [0.5, 0.0, 0.0]}}}
 J
-for scene in station village; do
+for scene in ${SCENES:-station village}; do
   for v in wet:rain snowy:snow; do
     variant=${v%%:*}; weather=${v##*:}
     [ -f "$OUT/${scene}_${weather}/dataset.json" ] && continue

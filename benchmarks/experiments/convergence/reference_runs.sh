@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The convergence study's runs (docs/record/convergence.md), one thread per run, with test snapshots.
 # - CELL = <dataset folder under DATA_DIR>:<method>: a frozen reference, the trainer at 30,000
-#   iterations (the reference schedule) with snapshots at 500 ... 25,000; writes
+#   iterations (`--schedule reference`) with snapshots at 500 ... 25,000; writes
 #   benchmarks/baselines/convergence/<data>_<method>.json.
-# - CELL = <data>:<method>:<iterations>: a tuning run of the run-length-scaled schedule at that length,
+# - CELL = <data>:<method>:fast: the default fast schedule at its own length, snapshots every 1000
+#   iterations; writes benchmarks/baselines/convergence/fast/<data>_<method>.json.
+# - CELL = <data>:<method>:<iterations>: a tuning run of the reference schedule scaled to that length,
 #   with snapshots at fifths of the run; writes benchmarks/baselines/convergence/tuning/<data>_<method>_<iterations>.json.
 #   Tuning scenes only (make_tuning_scenes.sh), never benchmark scenes.
 # - CELL = <data>:<method>:<iterations>:<options.json>: the same with `--train-options options.json` (a
@@ -19,18 +21,24 @@ ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
 BIN=$(realpath "${1:?usage: reference_runs.sh WEATHERGS_BINARY DATA_DIR RUNS_DIR CELL...}")
 DATA=$(realpath "$2"); RUNS=$(realpath -m "$3"); shift 3
 DST="$ROOT/benchmarks/baselines/convergence"
-mkdir -p "$RUNS" "$DST/tuning"
+mkdir -p "$RUNS" "$DST/tuning" "$DST/fast"
 for cell in "$@"; do
   IFS=: read -r data method iterations options <<<"$cell"
   if [ -z "$iterations" ]; then
-    name="${data}_${method}"; dst="$DST/$name.json"; iterations=30000
+    name="${data}_${method}"; dst="$DST/$name.json"
+    length=(--schedule reference --iterations 30000)
     eval_at=500,1000,2000,3000,5000,7000,10000,15000,20000,25000
+  elif [ "$iterations" = fast ]; then
+    name="${data}_${method}"; dst="$DST/fast/$name.json"; name="${name}_fast"
+    length=(); eval_at=$(seq -s, 1000 1000 29000)  # those past the run's length are not taken
   else
     name="${data}_${method}_${iterations}${options:+_$(basename "$options" .json)}"; dst="$DST/tuning/$name.json"
+    length=(--iterations "$iterations")  # a candidate's file names its schedule
+    [ -n "${options:-}" ] || length=(--schedule reference "${length[@]}")
     eval_at=$((iterations / 5)),$((2 * iterations / 5)),$((3 * iterations / 5)),$((4 * iterations / 5))
   fi
   out="$RUNS/$name"
-  cmd=("$BIN" --quiet --threads 1 reconstruct --data "$DATA/$data" --method "$method" --iterations "$iterations"
+  cmd=("$BIN" --quiet --threads 1 reconstruct --data "$DATA/$data" --method "$method" "${length[@]}"
        --eval-at "$eval_at" --checkpoint-every 500 --seed 0 --out "$out")
   [ -z "${options:-}" ] || cmd+=(--train-options "$(realpath "$options")")
   if [ ! -f "$out/results.json" ]; then
