@@ -101,6 +101,10 @@ Command make(CLI::App& root) {
                   "holds accuracy against training seconds; the radiance-field methods score at the same fractions of their run "
                   "(docs/methods.md)")
       ->delimiter(',');
+  sub->add_option("--eval-at-fractions", a->options.eval_fractions,
+                  "The same as fractions of the run's length (comma-separated, each in (0, 1), e.g. 0.25,0.5): "
+                  "floor(fraction x length), for a length the schedule sets")
+      ->delimiter(',');
   sub->add_flag("--force", a->options.force,
                 "Start the run over: remove what an earlier run left at --out (a complete run, or stages made with "
                 "other settings, which are refused otherwise)");

@@ -278,6 +278,9 @@ void ReconstructOptions::validate() const {
   if (checkpoint_every < 0) throw InputError("reconstruct options", "checkpoint_every must be >= 0");
   for (int it : eval_at)
     if (it < 1) throw InputError("reconstruct options", "eval_at holds " + std::to_string(it) + ": iterations must be >= 1");
+  for (double f : eval_fractions)
+    if (!(f > 0 && f < 1))
+      throw InputError("reconstruct options", "eval_fractions holds " + std::to_string(f) + ": each must be in (0, 1)");
   colmap.validate();
   led_mask.validate();
   if (led_adapt) led_adapt->validate();
@@ -298,6 +301,7 @@ ReconstructResult reconstruct(const ReconstructOptions& given, const reconstruct
   // The run's length and budget for this dataset: snapshots, records and staleness all use them.
   ReconstructOptions o = given;
   o.train = reconstruction::run_length_for(given.train, ds);
+  for (double f : given.eval_fractions) o.eval_at.push_back(std::max(1, int(f * o.train.iterations)));
   open_run_folder(o);
   const Run run{o, spec(o.method), ds, fs::path(o.out), on_stage};
   ReconstructResult out;

@@ -54,6 +54,9 @@ struct ReconstructOptions {
   // run (radiance field: it * nerf.iterations / train.iterations, rounded). Those >= train.iterations
   // are ignored (the final model is always a point of the curve). Each must be >= 1.
   std::vector<int> eval_at;
+  // The same as fractions of the run's resolved length (each in (0, 1)): max(1, floor(f x length)),
+  // for a run whose length the schedule sets (the workflow's curve_fractions).
+  std::vector<double> eval_fractions;
   bool force = false;  // remove what an earlier run left at `out` and start over
   PointsPolicy points = PointsPolicy::kAuto;
   capture::ColmapOptions colmap;

@@ -74,5 +74,37 @@ TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
   EXPECT_TRUE(fs::exists(out + "/runs/pool_rain/oracle/seed1/results.json"));
 }
 
+// `iterations: fast` (a dry run): no --iterations, the curve as fractions of each run's own length,
+// and the cluster's time request from the fast length of the variant's profile (tiny: 4 training
+// views, 3000 iterations; quick: 14, 7000), so quick asks more time than tiny.
+TEST(Workflow, FastIterationsLetEachRunTakeItsOwnLength) {
+  if (capture::find_executable("snakemake").empty()) GTEST_SKIP() << "snakemake not installed";
+  testing::TempDir tmp;
+  const std::string src = WEATHERGS_SOURCE_DIR;
+  auto dry_run = [&](const std::string& profile) {
+    const std::string log = tmp / (profile + ".log");
+    const std::string cmd = "cd '" + std::string(tmp.path()) + "' && USER=${USER:-weathergs} snakemake -n -p -s " + src +
+                            "/workflow/Snakefile --cores 2 --config weathergs=" + WEATHERGS_BINARY + " scenes=" + src +
+                            "/scenes out=" + (tmp / profile) + " profile=" + profile +
+                            " 'variants=[pool_rain]' 'methods=[3dgs]' 'seeds=[0]' iterations=fast > '" + log + "' 2>&1";
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << read_file(log);
+    return read_file(log);
+  };
+  auto runtime = [](const std::string& log) {
+    const size_t at = log.find("rule reconstruct:");
+    const size_t r = log.find("runtime=", at);
+    return at == std::string::npos || r == std::string::npos ? -1 : std::atoi(log.c_str() + r + 8);
+  };
+  const std::string tiny = dry_run("tiny"), quick = dry_run("quick");
+  const size_t cmd = tiny.find(" reconstruct --data ");
+  ASSERT_NE(cmd, std::string::npos) << tiny;
+  const std::string line = tiny.substr(cmd, tiny.find('\n', cmd) - cmd);
+  EXPECT_EQ(line.find("--iterations"), std::string::npos) << line;
+  EXPECT_NE(line.find("--eval-at-fractions 0.125,0.25,0.5"), std::string::npos) << line;
+  // config.yaml: tiny 5 + 5 per 1000 iterations, quick 10 + 5 per 1000.
+  EXPECT_EQ(runtime(tiny), 20) << tiny;
+  EXPECT_EQ(runtime(quick), 45) << quick;
+}
+
 }  // namespace
 }  // namespace weathergs::methods

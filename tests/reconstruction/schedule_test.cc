@@ -71,15 +71,15 @@ TEST(Schedule, FastLengthAndBudgetComeFromTheTrainingData) {
   ASSERT_EQ(o.iterations, 0);
   const int64_t quick = 300 * 200, paper = 600 * 400;
   // 500 passes over the views, rounded up to 100, within [3000, 30000].
-  EXPECT_EQ(o.with_run_length(14, quick).iterations, 7000);    // quick profile
-  EXPECT_EQ(o.with_run_length(34, paper).iterations, 17000);   // paper profile
+  EXPECT_EQ(o.with_run_length(14, quick).iterations, 7000);    // quick profile: 14 of 16 views train
+  EXPECT_EQ(o.with_run_length(29, paper).iterations, 14500);   // paper profile: 29 of 34
   EXPECT_EQ(o.with_run_length(3, quick).iterations, 3000);
   EXPECT_EQ(o.with_run_length(15, quick).iterations, 7500);
   EXPECT_EQ(o.with_run_length(200, paper).iterations, 30000);
   // The budget: 2 Gaussians per pixel of the largest training image, under the memory guard.
   EXPECT_EQ(o.with_run_length(14, quick).max_gaussians, 120000);
-  EXPECT_EQ(o.with_run_length(34, paper).max_gaussians, 480000);
-  EXPECT_EQ(o.with_run_length(34, int64_t(4000) * 3000).max_gaussians, TrainOptions().max_gaussians);
+  EXPECT_EQ(o.with_run_length(29, paper).max_gaussians, 480000);
+  EXPECT_EQ(o.with_run_length(29, int64_t(4000) * 3000).max_gaussians, TrainOptions().max_gaussians);
   // Explicit values are kept; a resolved set resolves to itself.
   TrainOptions given = o;
   given.iterations = 1234;
