@@ -43,14 +43,7 @@ TEST(FastSchedule, ReachesTheQualityBarAtItsOwnLength) {
   ro.model = o.out;
   ro.out = dir / "renders";
   render_run(ro);
-  double sum = 0;
-  for (const std::string& v : d.split("test")) {
-    const Image a = read_image(ro.out + "/" + v + ".png"), b = read_image(d.path(ImageKind::kImages, v));
-    double se = 0;
-    for (size_t i = 0; i < a.data.size(); ++i) se += (a.data[i] - b.data[i]) * (a.data[i] - b.data[i]);
-    sum += 10 * std::log10(1.0 / std::max(se / double(a.data.size()), 1e-12));
-  }
-  const double psnr = sum / double(d.split("test").size());
+  const double psnr = testing::mean_test_psnr(d, ro.out);
   std::printf("fast schedule: %d iterations, %lld Gaussians, test PSNR %.2f dB\n", r.iterations,
               static_cast<long long>(r.num_gaussians), psnr);
   EXPECT_GT(psnr, kFastTestPsnrBar);

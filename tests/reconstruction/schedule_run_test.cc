@@ -34,14 +34,7 @@ TEST(Schedule, ShortRunDoesNotEndOnAReset) {
     r.model = o.out;
     r.out = dir / (name + "_renders");
     render_run(r);
-    double sum = 0;
-    for (const std::string& v : d.split("test")) {
-      const Image a = read_image(r.out + "/" + v + ".png"), b = read_image(d.path(ImageKind::kImages, v));
-      double se = 0;
-      for (size_t i = 0; i < a.data.size(); ++i) se += (a.data[i] - b.data[i]) * (a.data[i] - b.data[i]);
-      sum += 10 * std::log10(1.0 / std::max(se / double(a.data.size()), 1e-12));
-    }
-    return sum / double(d.split("test").size());
+    return testing::mean_test_psnr(d, r.out);
   };
   // 3000 iterations, the README's example: the reference schedule resets opacity at iteration 3000,
   // the last one. Bars: the scaled run must be a sensible reconstruction (25 dB) and far better than

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -133,6 +134,19 @@ inline Dataset write_synthetic_dataset(const std::string& root, const GaussianSe
     write_colmap_text((fs::path(root) / "sparse/0").string(), m);
   }
   return d;
+}
+
+// Mean PSNR over the dataset's test views of the renders `renders_dir/<view>.png` (8-bit, as
+// `weathergs render` writes them) against the dataset's images.
+inline double mean_test_psnr(const Dataset& d, const std::string& renders_dir) {
+  double sum = 0;
+  for (const std::string& v : d.split("test")) {
+    const Image a = read_image(renders_dir + "/" + v + ".png"), b = read_image(d.path(ImageKind::kImages, v));
+    double se = 0;
+    for (size_t i = 0; i < a.data.size(); ++i) se += (a.data[i] - b.data[i]) * (a.data[i] - b.data[i]);
+    sum += 10 * std::log10(1.0 / std::max(se / double(a.data.size()), 1e-12));
+  }
+  return sum / double(d.split("test").size());
 }
 
 }  // namespace weathergs::reconstruction::testing
