@@ -182,12 +182,9 @@ GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& 
 TrainOptions run_length_for(const TrainOptions& train, const Dataset& dataset) {
   const std::vector<std::string>& names = dataset.split("train");
   if (names.empty()) throw InputError(dataset.root, "has no training views");
-  int64_t pixels = 0;
-  for (const std::string& n : names) {
-    const Camera& c = dataset.camera(n);
-    pixels = std::max(pixels, int64_t(c.width) * c.height);
-  }
-  return train.with_run_length(int(names.size()), pixels);
+  std::vector<Camera> cameras;
+  for (const std::string& n : names) cameras.push_back(dataset.camera(n));
+  return train.with_run_length(cameras);
 }
 
 StageOutput run_output(const std::string& run_dir, const TrainOptions& train) {

@@ -175,6 +175,12 @@ TrainOptions TrainOptions::with_run_length(int views, int64_t pixels) const {
   return o;
 }
 
+TrainOptions TrainOptions::with_run_length(const std::vector<Camera>& train_cameras) const {
+  int64_t pixels = 0;
+  for (const Camera& c : train_cameras) pixels = std::max(pixels, int64_t(c.width) * c.height);
+  return with_run_length(int(train_cameras.size()), pixels);
+}
+
 TrainOptions TrainOptions::effective() const {
   constexpr int kReferenceIterations = 30000;
   constexpr int kResetsPerDensification = 30;  // reference: reset every 3000, densify every 100

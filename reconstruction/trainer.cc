@@ -63,17 +63,15 @@ Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const
     : views_(std::move(views)), extent_(extent), g_(std::move(initial)) {
   options.validate("train options");
   WGS_CHECK(!views_.empty());
-  int64_t pixels = 0;
-  for (const TrainView& v : views_) pixels = std::max(pixels, int64_t(v.camera.width) * v.camera.height);
-  requested_ = options.with_run_length(int(views_.size()), pixels);
+  std::vector<Camera> cameras;
+  for (const TrainView& v : views_) cameras.push_back(v.camera);
+  requested_ = options.with_run_length(cameras);
   options_ = requested_.effective();
   WGS_CHECK(extent_ > 0);
   for (const TrainView& v : views_) {
     WGS_CHECK_EQ(v.rgb.size(), size_t(v.camera.width) * v.camera.height * 3);
     if (!v.invalid.empty()) WGS_CHECK_EQ(v.invalid.size(), size_t(v.camera.width) * v.camera.height);
   }
-  std::vector<Camera> cameras;
-  for (const TrainView& v : views_) cameras.push_back(v.camera);
   rig_center_ = rig_center(cameras);
   owner_.assign(g_.size(), kSceneOwner);
   if (options_.distractors_per_view > 0) {

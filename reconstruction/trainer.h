@@ -132,6 +132,8 @@ struct TrainOptions {
   // iterations 0 becomes the schedule's length, and kFast's budget caps max_gaussians when that is
   // still the default. Everything else is kept; a resolved set is returned as it is.
   TrainOptions with_run_length(int views, int64_t pixels) const;
+  // The same for these training cameras: their count and the largest one's pixels.
+  TrainOptions with_run_length(const std::vector<Camera>& train_cameras) const;
 };
 const char* to_string(TrainOptions::Schedule s);
 // "fast" | "reference" | "unscaled" ("scaled", the name reference had before, is read as it);
