@@ -29,7 +29,7 @@ constexpr int kShFloats = kShCoeffs * 3;   // RGB per coefficient
 // Reference rasterizer constants (diff-gaussian-rasterization, forward.cu / auxiliary.h).
 constexpr double kNearPlane = 0.2;          // cull p_camera.z <= 0.2
 constexpr double kJacobianClampFov = 1.3;   // clamp x/z to 1.3 x the half field of view
-constexpr double kLowPass2d = 0.3;          // px^2 added to the 2D covariance diagonal
+constexpr double kLowPass2d = 0.3;          // px^2 added to the 2D covariance diagonal (RasterCamera::low_pass)
 constexpr double kMinEigenGap = 0.1;        // sqrt(max(0.1, mid^2 - det)) in the radius
 constexpr double kAlphaMax = 0.99;
 constexpr double kAlphaMin = 1.0 / 255.0;
@@ -190,6 +190,10 @@ struct RasterCamera {
   // Jacobian clamp on x/z and y/z: the image's extent widened by 30% of the half size on each side
   // (equals the reference's +-1.3 tan(fov/2) when the principal point is centered).
   T lim_x_lo = 0, lim_x_hi = 0, lim_y_lo = 0, lim_y_hi = 0;
+  // px^2 added to the 2D covariance diagonal: the reference's 0.3 for a full-resolution pixel. An
+  // image downsampled by f takes 0.3 / f^2 (reconstruction/resolution.h), the same footprint in the
+  // scene, so a model trained on small images renders at full size as it was trained.
+  T low_pass = T(kLowPass2d);
 
   template <typename CameraT>
   static RasterCamera from(const CameraT& c) {
@@ -230,8 +234,8 @@ inline Projection<T> project_gaussian(const Vec3<T>& p_world, const Mat3<T>& sig
   j << cam.fx * iz, T(0), -cam.fx * tx * iz * iz, T(0), cam.fy * iz, -cam.fy * ty * iz * iz;
   Mat23<T> t = j * cam.rotation;
   out.cov = t * sigma * t.transpose();
-  out.cov(0, 0) += T(kLowPass2d);
-  out.cov(1, 1) += T(kLowPass2d);
+  out.cov(0, 0) += cam.low_pass;
+  out.cov(1, 1) += cam.low_pass;
   return out;
 }
 

@@ -251,9 +251,9 @@ WGS_ALWAYS_INLINE void preprocess_block(const GaussianSet<float>& g, const Raste
     u0[k] = sum3(t0[0], sig[0][k], t0[1], sig[1][k], t0[2], sig[2][k]);
     u1[k] = sum3(t1[0], sig[0][k], t1[1], sig[1][k], t1[2], sig[2][k]);
   }
-  const vf cov_a = sum3(u0[0], t0[0], u0[1], t0[1], u0[2], t0[2]) + float(kLowPass2d);
+  const vf cov_a = sum3(u0[0], t0[0], u0[1], t0[1], u0[2], t0[2]) + cam.low_pass;
   const vf cov_b = sum3(u0[0], t1[0], u0[1], t1[1], u0[2], t1[2]);
-  const vf cov_c = sum3(u1[0], t1[0], u1[1], t1[1], u1[2], t1[2]) + float(kLowPass2d);
+  const vf cov_c = sum3(u1[0], t1[0], u1[1], t1[1], u1[2], t1[2]) + cam.low_pass;
 
   // sh_to_color along view_direction.
   const vf vx = px - cam.center_world.x(), vy = py - cam.center_world.y(), vz = pz - cam.center_world.z();

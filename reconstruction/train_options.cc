@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/json_fields.h"
+#include "reconstruction/resolution.h"
 #include "reconstruction/trainer.h"
 
 namespace weathergs::reconstruction {
@@ -52,6 +53,14 @@ void TrainOptions::validate(const std::string& where) const {
     fail("visibility_weight", std::to_string(visibility_weight), "must be a finite number >= 0");
   if (!(distractor_opacity_weight >= 0 && std::isfinite(distractor_opacity_weight)))
     fail("distractor_opacity_weight", std::to_string(distractor_opacity_weight), "must be a finite number >= 0");
+  if (!is_downsample_factor(downsample_start))
+    fail("downsample_start", std::to_string(downsample_start), "must be 1, 2, 4, 8 or 16");
+  if ((in_the_wild || robust != Robust::kNone) && downsample_start > 1)
+    fail("downsample_start", std::to_string(downsample_start),
+         "gs-w-lite and robust-3dgs train at full resolution: their visibility maps and distractor masks are "
+         "defined per full-resolution pixel");
+  if (!(full_resolution_at > 0 && full_resolution_at <= 1))
+    fail("full_resolution_at", std::to_string(full_resolution_at), "must be in (0, 1]: every run ends at full resolution");
   if (random_init_count < 1) fail("random_init_count", std::to_string(random_init_count), "must be >= 1");
   if (!(random_init_near_m > 0 && random_init_far_m > random_init_near_m && std::isfinite(random_init_far_m)))
     fail("random_init_near_m/far_m", std::to_string(random_init_near_m) + "/" + std::to_string(random_init_far_m),
@@ -104,6 +113,8 @@ constexpr auto kFields = [](auto& s, auto& f) {
   f("large_prune", s.large_prune, OneOf{LargePrune::kCameraExtent, LargePrune::kDistance},
     WhenAbsent{LargePrune::kCameraExtent});
   f("max_gaussians", s.max_gaussians);
+  f("downsample_start", s.downsample_start);
+  f("full_resolution_at", s.full_resolution_at);
   f("background", s.background);
   f("random_init", s.random_init, OneOf{RandomInit::kFrustum, RandomInit::kPhotoConsistent});
   f("random_init_count", s.random_init_count);

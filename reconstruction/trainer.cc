@@ -73,6 +73,10 @@ Trainer::Trainer(std::vector<TrainView> views, GaussianSet<float> initial, const
     if (!v.invalid.empty()) WGS_CHECK_EQ(v.invalid.size(), size_t(v.camera.width) * v.camera.height);
   }
   rig_center_ = rig_center(cameras);
+  for (int f = 2; f <= options_.downsample_start; f *= 2) {
+    std::vector<TrainView>& level = lowres_.emplace_back();
+    for (const TrainView& v : views_) level.push_back(downsample_view(v, f));
+  }
   owner_.assign(g_.size(), kSceneOwner);
   if (options_.distractors_per_view > 0) {
     add_distractors(cameras, options_.distractors_per_view, options_.seed, DistractorPlacement{}, &g_, &owner_);
@@ -152,8 +156,12 @@ IterationStats Trainer::step() {
   parameters_checked_ = false;
   if (it % options_.sh_degree_interval == 0 && sh_degree_ < options_.max_sh_degree) ++sh_degree_;
   const int view_index = view_for_iteration(it);
-  const TrainView& view = views_[view_index];
-  const RasterCamera<float> cam = RasterCamera<float>::from(view.camera);
+  const int factor = downsample_factor(options_.downsample_start, options_.full_resolution_at, options_.iterations, it);
+  int level = -1;
+  while ((2 << (level + 1)) <= factor) ++level;  // factor 2^(level + 1); -1 at full resolution
+  const TrainView& view = level < 0 ? views_[view_index] : lowres_[size_t(level)][view_index];
+  RasterCamera<float> cam = RasterCamera<float>::from(view.camera);
+  cam.low_pass = float(kLowPass2d / (factor * factor));  // the full-resolution pixel's footprint
   RasterSettings<float> rs;
   rs.sh_degree = sh_degree_;
   for (int c = 0; c < 3; ++c) rs.background[c] = float(options_.background[c]);
@@ -205,6 +213,7 @@ IterationStats Trainer::step() {
   stats.iteration = it;
   stats.loss = lv.loss;
   stats.psnr = psnr_from_mse(lv.mse);
+  stats.downsample = factor;
   bool skip_adam = false;
   // The reference updates its error statistics with the running densification statistics only.
   if (options_.robust == TrainOptions::Robust::kRobustFilter && it < options_.densify_until)
@@ -228,7 +237,7 @@ IterationStats Trainer::step() {
       grad_count_[i] += 1;
     }
     if (densify_now) {
-      densify_and_prune(it > options_.large_prune_from);
+      densify_and_prune(it > options_.large_prune_from, factor);
       stats.densified = true;
       // The reference replaces every parameter tensor here, leaving them without gradients, so
       // its optimizer.step() of this iteration updates nothing.
@@ -318,7 +327,7 @@ void Trainer::reset_opacity() {
   }
 }
 
-void Trainer::densify_and_prune(bool prune_large) {
+void Trainer::densify_and_prune(bool prune_large, int factor) {
   const size_t n = g_.size();
   const float threshold = float(options_.densify_grad_threshold);
   const float dense = float(options_.percent_dense * extent_);
@@ -333,7 +342,9 @@ void Trainer::densify_and_prune(bool prune_large) {
   }
   // The memory guard: a clone adds one Gaussian, a split adds one net (two copies replace the
   // original). Over budget, keep the candidates with the largest mean gradient.
-  const int64_t budget = options_.max_gaussians - int64_t(n);
+  // Downsampled, the budget shrinks with the pixels (DashGaussian's primitive schedule): a small
+  // image holds as many Gaussians per pixel as the full one, no more.
+  const int64_t budget = std::max<int64_t>(1, options_.max_gaussians / (int64_t(factor) * factor)) - int64_t(n);
   if (int64_t(num_clone + num_split) > std::max<int64_t>(budget, 0)) {
     std::vector<std::pair<float, size_t>> ranked;
     for (size_t i = 0; i < n; ++i)

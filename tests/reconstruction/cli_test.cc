@@ -88,6 +88,9 @@ TEST(CliTest, TrainOptionsFileUnderTheGivenFlags) {
   EXPECT_DOUBLE_EQ(o.get<double>("lambda_dssim"), 0.5);
   EXPECT_EQ(o.get<std::string>("random_init"), "frustum");
   EXPECT_EQ(o.get<int>("densify_from"), TrainOptions{}.densify_from);
+  // Including the keys whose absence from a run record means the rule older runs trained with.
+  EXPECT_EQ(o.get<std::string>("large_prune"), to_string(TrainOptions{}.large_prune));
+  EXPECT_EQ(o.get<int>("large_prune_from"), TrainOptions{}.large_prune_from);
   // A misspelled key or a bad value is an error before training.
   write_file_atomic(file, R"({"densify_untill": 20})");
   EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r2"), 2);
