@@ -1,5 +1,6 @@
 #include "restoration/led/detect_dataset.h"
 
+#include <cstdio>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -335,6 +336,20 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
   write_file_atomic((fs::path(dir.path()) / kDetectReportFile).string(), j.dump(2) + "\n");
   dir.commit();
   return report;
+}
+
+std::string silent_led_warning(const Json& detect_report) {
+  const auto gt = detect_report.find("ground_truth");
+  if (gt == detect_report.end() || !gt->is_object()) return "";
+  const double truth = gt->value("gt_fraction", 0.0), masked = gt->value("mask_fraction", 0.0);
+  if (truth < kSilentLedTruthFraction || masked >= kSilentLedMaskShare * truth) return "";
+  char s[256];
+  std::snprintf(s, sizeof s,
+                "the LED masked %.4f%% of the pixels where the ground-truth lens drops cover %.1f%%: its masks "
+                "exclude almost none of the drops (other optics or drop sizes than it was calibrated on? try "
+                "detect --adapt)",
+                100 * masked, 100 * truth);
+  return s;
 }
 
 }  // namespace weathergs::restoration::led

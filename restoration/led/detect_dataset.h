@@ -121,6 +121,14 @@ StageOutput detect_output(const std::string& out, const DetectDatasetOptions& op
 // and detect.json last, atomically. InputError names the dataset, view, weights or option.
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& options);
 
+// A LED that fails silently: where the dataset's ground-truth drops cover at least
+// kSilentLedTruthFraction of the scored views' pixels and the masks cover less than
+// kSilentLedMaskShare of what they do, the warning to show (naming both fractions); empty otherwise,
+// and for a detect.json without ground truth. Reads a detect.json as detect_dataset writes it.
+inline constexpr double kSilentLedTruthFraction = 0.1;  // "a tenth or more of the views"
+inline constexpr double kSilentLedMaskShare = 0.01;     // a hundredth of the truth: "masks nothing"
+std::string silent_led_warning(const Json& detect_report);
+
 // The mean attention of `views` (sRGB images of one size): the averaging step on its own (calibration).
 Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch = 1);
 

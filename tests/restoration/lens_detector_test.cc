@@ -392,6 +392,22 @@ TEST(LensDetectorTest, PeakRelativeRule) {
 using testing_util::run_cli;
 
 // A dataset whose images/ carry the toy drops (the same on every view) and masks/lens/ their masks.
+// A LED that masks nothing where drops cover a tenth of the views says so; one that masks a real
+// share of them, or a detect.json without ground truth, does not.
+TEST(DetectDatasetTest, SilentLedWarnsOnlyWhereDropsAreAndMasksAreNot) {
+  auto report = [](double truth, double masked) {
+    return Json{{"ground_truth", {{"gt_fraction", truth}, {"mask_fraction", masked}}}};
+  };
+  const std::string w = silent_led_warning(report(0.12, 0.0));
+  EXPECT_NE(w.find("12.0%"), std::string::npos) << w;
+  EXPECT_NE(w.find("0.0000%"), std::string::npos) << w;
+  EXPECT_FALSE(silent_led_warning(report(0.12, 0.0011)).empty());  // under a hundredth of 12%
+  EXPECT_TRUE(silent_led_warning(report(0.12, 0.0013)).empty());
+  EXPECT_TRUE(silent_led_warning(report(0.09, 0.0)).empty());  // drops on under a tenth
+  EXPECT_TRUE(silent_led_warning(Json{{"ground_truth", nullptr}}).empty());
+  EXPECT_TRUE(silent_led_warning(Json::object()).empty());
+}
+
 void make_drop_dataset(const std::string& dir, int views, uint64_t seed) {
   testing_util::make_drop_dataset(dir, views, [seed](int w, int h, int i) { return toy_example(w, h, seed, i, true); });
 }
