@@ -103,13 +103,7 @@ struct TrainFlags {
       train = parsed;
       return;
     }
-    const JsonReader file = JsonReader::from_file(options_file);
-    train = TrainOptions::from_json(file);
-    // from_json reads a key a run record lacks as what runs before it trained with (the large prune:
-    // camera_extent, from the reset); a key a user's file leaves out keeps its default, as it says.
-    const TrainOptions defaults;
-    if (!file.has("large_prune")) train.large_prune = defaults.large_prune;
-    if (!file.has("large_prune_from")) train.large_prune_from = defaults.large_prune_from;
+    train = TrainOptions::from_user_json(JsonReader::from_file(options_file));
     for (const auto& [option, copy] : copies_)
       if (option->count() > 0) copy(parsed, train);
   }

@@ -34,6 +34,9 @@ namespace weathergs::json_fields {
 enum class Absent {
   kError,  // every key is required, unless its entry says otherwise (Optional, WhenAbsent, OmitIf)
   kKeep,   // a missing key keeps the value the record had before reading (its documented default)
+  // kKeep for a file a user writes rather than a record: WhenAbsent (what older records meant) does
+  // not apply, and a missing key keeps its default there too.
+  kDefaults,
 };
 
 // Per-entry options; any of them may follow the field, in any order.
@@ -202,7 +205,8 @@ class Reader {
         return;
       }
       r_.mark(key);
-      if (const auto* w = detail::find_option<WhenAbsent<T>>(opts...)) {
+      const auto* w = detail::find_option<WhenAbsent<T>>(opts...);
+      if (w && absent_ != Absent::kDefaults) {
         field = w->value;
       } else if (const auto* o = detail::find_option<OmitIf<T>>(opts...)) {
         field = o->value;

@@ -240,10 +240,11 @@ evaluator::Results evaluate_stage(const Run& run, const std::string& renders_dir
   if (run.recipe().particle_filter)
     res.method_info["filter_seconds"] = report_seconds(run.dir / kFilteredDir / restoration::aef::kFilterReportFile);
   if (run.recipe().lens_detector) {
-    const fs::path report = run.dir / kDetectedDir / restoration::led::kDetectReportFile;
-    res.method_info["detect_seconds"] = report_seconds(report);
+    const fs::path path = run.dir / kDetectedDir / restoration::led::kDetectReportFile;
+    const Json report = fs::exists(path) ? read_json_file(path.string()) : Json::object();
+    res.method_info["detect_seconds"] = report.value("seconds", 0.0);
     // A LED that masked nothing on drops that are there must say so, not pass as a result.
-    const std::string silent = fs::exists(report) ? restoration::led::silent_led_warning(read_json_file(report.string())) : "";
+    const std::string silent = restoration::led::silent_led_warning(report);
     if (!silent.empty()) {
       run.stage("warning: " + silent);
       res.method_info["warnings"] = Json::array({silent});

@@ -237,4 +237,10 @@ TrainOptions TrainOptions::from_json(const JsonReader& r) {
   return o;
 }
 
+TrainOptions TrainOptions::from_user_json(const JsonReader& r) {
+  TrainOptions o = json_fields::read(r, TrainOptions{}, kFields, json_fields::Absent::kDefaults);
+  o.validate(r.where());
+  return o;
+}
+
 }  // namespace weathergs::reconstruction

@@ -11,6 +11,7 @@
 #include "core/rng.h"
 #include "reconstruction/adam.h"
 #include "reconstruction/distractors.h"
+#include "reconstruction/resolution.h"
 
 namespace weathergs::reconstruction {
 

@@ -17,7 +17,6 @@
 #include "reconstruction/in_the_wild.h"
 #include "reconstruction/loss.h"
 #include "reconstruction/rasterizer.h"
-#include "reconstruction/resolution.h"
 #include "reconstruction/robust_mask.h"
 
 namespace weathergs::reconstruction {
@@ -134,7 +133,10 @@ struct TrainOptions {
 
   void validate(const std::string& where) const;
   Json to_json() const;
-  static TrainOptions from_json(const JsonReader& r);
+  static TrainOptions from_json(const JsonReader& r);  // a run record or checkpoint header
+  // A file a user writes (--train-options): every key it leaves out keeps its default, also those
+  // whose absence from a record means what older runs trained with (large_prune, large_prune_from).
+  static TrainOptions from_user_json(const JsonReader& r);
   // The options the trainer runs with: the schedule scaled to `iterations` (kFast, kReference),
   // else *this. Needs a resolved length (with_run_length).
   TrainOptions effective() const;
