@@ -7,9 +7,11 @@
 #include "apps/resources.h"
 #include "apps/train_flags.h"
 #include "core/dataset.h"
+#include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/progress.h"
 #include "methods/reconstruct.h"
+#include "nerf/trainer.h"
 #include "reconstruction/run.h"
 
 namespace weathergs::cli {
@@ -21,6 +23,8 @@ struct ReconstructArgs {
   bool no_triangulate = false;
   std::string led_weights, aef_weights;
   double led_threshold = 0;
+  std::string nerf_options_file;
+  CLI::Option* nerf_iterations_flag = nullptr;
   bool led_adapt = false;
   int led_adapt_layouts = 0, led_adapt_iterations = 0;  // 0: LedAdaptOptions' defaults
   TrainFlags train;
@@ -33,6 +37,12 @@ int run(ReconstructArgs& a) {
   o.points = a.no_triangulate ? methods::PointsPolicy::kDataset : methods::PointsPolicy::kAuto;
   o.scoring = a.scoring.options();
   a.train.apply(o.train);
+  if (!a.nerf_options_file.empty()) {
+    const int iterations = o.nerf.iterations;
+    o.nerf = nerf::NerfOptions::from_user_json(JsonReader::from_file(a.nerf_options_file));
+    if (a.nerf_iterations_flag->count() > 0) o.nerf.iterations = iterations;
+    o.nerf.validate("--nerf-options " + a.nerf_options_file);
+  }
   // The run's length is known before it starts (the progress bar's total); reconstruct() resolves the same.
   if (!o.dataset.empty()) o.train = reconstruction::run_length_for(o.train, read_dataset(o.dataset));
   const methods::Recipe& recipe = methods::spec(o.method).recipe;
@@ -92,10 +102,14 @@ Command make(CLI::App& root) {
   sub->add_option("--method", a->method, "Method: " + methods)->capture_default_str();
   sub->add_option("--out", a->options.out, "Run folder")->required();
   a->train.add_to(sub, a->options.train, a->options.checkpoint_every);
-  sub->add_option("--nerf-iterations", a->options.nerf.iterations,
+  a->nerf_iterations_flag = sub->add_option("--nerf-iterations", a->options.nerf.iterations,
                   "Training iterations of the radiance-field methods (nerf, derainnerf, weathergs-nerf, nerf-oracle; "
                   "batches of " + std::to_string(a->options.nerf.batch_rays) + " rays; docs/nerf.md)")
       ->capture_default_str()->check(CLI::PositiveNumber);
+  sub->add_option("--nerf-options", a->nerf_options_file,
+                  "NerfOptions of the radiance-field methods as JSON, the keys of their run.json's \"options\" (docs/nerf.md): "
+                  "a key it leaves out keeps its default, and --nerf-iterations given on the command line overrides it")
+      ->check(CLI::ExistingFile);
   sub->add_option("--eval-at", a->options.eval_at,
                   "Also score the test views at these iterations (comma-separated, e.g. 500,1000,2000): RUN/curve.json "
                   "holds accuracy against training seconds; the radiance-field methods score at the same fractions of their run "

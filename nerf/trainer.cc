@@ -79,6 +79,12 @@ NerfOptions NerfOptions::from_json(const JsonReader& r) {
   return o;
 }
 
+NerfOptions NerfOptions::from_user_json(const JsonReader& r) {
+  NerfOptions o = json_fields::read(r, NerfOptions{}, kNerfFields, json_fields::Absent::kDefaults);
+  o.validate(r.where());
+  return o;
+}
+
 NerfTrainer::NerfTrainer(std::vector<TrainView> views, const FrustumFrame& frame, const NerfOptions& options)
     : views_(std::move(views)), options_(options) {
   options_.validate("nerf options");

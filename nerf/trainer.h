@@ -44,7 +44,9 @@ struct NerfOptions {
 
   void validate(const std::string& where) const;  // InputError naming the field and the rule
   Json to_json() const;
-  static NerfOptions from_json(const JsonReader& r);
+  static NerfOptions from_json(const JsonReader& r);  // a run's record: every key required
+  // A user's file (`reconstruct --nerf-options`): a key it leaves out keeps its default.
+  static NerfOptions from_user_json(const JsonReader& r);
 };
 
 struct NerfIterationStats {

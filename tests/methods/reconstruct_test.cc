@@ -361,6 +361,31 @@ TEST(ReconstructTest, EveryStageReusesOnlyOutputsMadeWithItsSettings) {
   EXPECT_EQ(read_json_file(tmp / "tophat/model/run.json").at("options").at("seed"), 3);
 }
 
+TEST(ReconstructTest, NerfOptionsFileUnderTheGivenFlag) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp), file = tmp / "nerf.json";
+  write_file_atomic(file, R"({"iterations": 40, "batch_rays": 256, "depth_cells": 16, "pixels_per_cell": 4,
+      "level_scales": [1.0], "upsample_at": []})");
+  const std::string base = "reconstruct --data " + data + " --method nerf --no-triangulate --no-lpips ";
+  // The file's keys, --nerf-iterations given on the command line over it, the rest at their defaults.
+  ASSERT_EQ(run_cli(base + "--nerf-options " + file + " --nerf-iterations 12 --out " + (tmp / "run"), tmp / "1.log"), 0)
+      << read_file(tmp / "1.log");
+  const Json o = read_json_file(tmp / "run/model/run.json").at("options");
+  EXPECT_EQ(o.at("iterations"), 12);
+  EXPECT_EQ(o.at("depth_cells"), 16);
+  EXPECT_EQ(o.at("batch_rays"), 256);
+  EXPECT_EQ(o.at("tv_fraction"), nerf::NerfOptions{}.tv_fraction);
+  // A misspelled key, or a value its rule refuses, is an error naming the file before any work.
+  write_file_atomic(file, R"({"depth_cell": 16})");
+  EXPECT_EQ(run_cli(base + "--nerf-options " + file + " --out " + (tmp / "r2"), tmp / "2.log"), 2);
+  EXPECT_NE(read_file(tmp / "2.log").find("depth_cell"), std::string::npos) << read_file(tmp / "2.log");
+  write_file_atomic(file, R"({"level_scales": [0.5, 1.0], "upsample_at": []})");
+  EXPECT_EQ(run_cli(base + "--nerf-options " + file + " --out " + (tmp / "r3"), tmp / "3.log"), 2);
+  EXPECT_NE(read_file(tmp / "3.log").find("upsample_at"), std::string::npos) << read_file(tmp / "3.log");
+  EXPECT_FALSE(fs::exists(tmp / "r2"));
+  EXPECT_FALSE(fs::exists(tmp / "r3"));
+}
+
 TEST(ReconstructTest, BadInputThroughTheCli) {
   TempDir tmp;
   EXPECT_EQ(run_cli("reconstruct --data " + (tmp / "none") + " --method 3dgs --out " + (tmp / "r"), tmp / "1.log"), 2);
