@@ -3,7 +3,7 @@
 # benchmark scenes), quick profile, with the benchmark's paper-style heavy rain with lens drops and
 # heavy snow (the weather of pool's variants). Settings are chosen on these; the benchmark cells are
 # read once afterwards.
-# Usage: [SCENES="village"] make_tuning_scenes.sh WEATHERGS_BINARY OUT_DIR [CACHE_DIR]
+# Usage: [SCENES="village"] [WEATHERS="rain"] make_tuning_scenes.sh WEATHERGS_BINARY OUT_DIR [CACHE_DIR]
 # Writes OUT_DIR/{station,village}_{rain,snow}/ with sparse/0 (weathered views) and sparse_clean/0.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
@@ -21,6 +21,7 @@ J
 for scene in ${SCENES:-station village}; do
   for v in wet:rain snowy:snow; do
     variant=${v%%:*}; weather=${v##*:}
+    [[ " ${WEATHERS:-rain snow} " == *" $weather "* ]] || continue
     [ -f "$OUT/${scene}_${weather}/dataset.json" ] && continue
     [ -f "$OUT/clear_${scene}_${variant}/dataset.json" ] ||
       "$W" --quiet --threads 1 generate --scene "$ROOT/scenes/training/$scene.json" --weather "$variant" \
