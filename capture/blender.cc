@@ -1,6 +1,9 @@
 #include "capture/blender.h"
 
 #include <cerrno>
+#include <chrono>
+#include <exception>
+#include <thread>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -10,6 +13,7 @@
 #include "core/dataset.h"
 #include "core/error.h"
 #include "core/image.h"
+#include "core/progress.h"
 #include "capture/process.h"
 
 namespace weathergs::capture {
@@ -38,6 +42,40 @@ void link_or_copy(const fs::path& from, const fs::path& to) {
   std::error_code ec;
   fs::create_hard_link(from, to, ec);
   if (ec) fs::copy_file(from, to, fs::copy_options::overwrite_existing);
+}
+
+// One Blender process of a render: a contiguous run of views, its own job, log and output folder.
+struct RenderPart {
+  int first_view = 0, end_view = 0;
+  int threads = 0;  // Blender's -t
+  fs::path job, log, out;
+};
+
+// Cycles renders the same pixels in every process only on one thread (with more, a pixel in ~25,000
+// may differ by one level: Embree's threaded BVH build), so a Cycles render runs as one-thread
+// processes side by side, one per available thread, each on its own views. EEVEE repeats under no
+// setting (docs/scenes.md, "Repeatability") and runs as one process with every thread given.
+std::vector<RenderPart> plan_render_parts(const std::string& engine, int views, int threads, const fs::path& root,
+                                          const fs::path& raw) {
+  int processes = 1;
+  if (engine == "cycles") {
+    const int available = threads > 0 ? threads : std::max(1, int(std::thread::hardware_concurrency()));
+    processes = std::max(1, std::min(available, views));
+  }
+  std::vector<RenderPart> parts;
+  for (int k = 0; k < processes; ++k) {
+    RenderPart p;
+    p.first_view = int(int64_t(views) * k / processes);
+    p.end_view = int(int64_t(views) * (k + 1) / processes);
+    p.threads = engine == "cycles" ? 1 : threads;
+    const std::string suffix = processes == 1 ? "" : "_" + std::to_string(k);
+    p.job = root / "logs" / ("blender_job" + suffix + ".json");
+    p.log = root / "logs" / ("blender" + suffix + ".log");
+    p.out = processes == 1 ? raw : raw / ("part_" + std::to_string(k));
+    fs::create_directories(p.out);
+    parts.push_back(p);
+  }
+  return parts;
 }
 
 }  // namespace
@@ -124,40 +162,67 @@ RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& va
   const fs::path raw = root / "render";
   fs::create_directories(root / "logs");
   fs::create_directories(raw);
+  const std::vector<RenderPart> parts = plan_render_parts(profile.engine, int(cameras.size()), options.threads, root, raw);
   Json job = blender_job(scene, variant, profile, cameras, markers);
-  job["output_dir"] = raw.string();
-  const std::string job_path = (root / "logs" / "blender_job.json").string();
-  write_file_atomic(job_path, job.dump(1));
-  const std::string log_path = (root / "logs" / "blender.log").string();
-
-  ProcessOptions popts;
-  popts.log_path = log_path;
-  popts.timeout_s = options.timeout_s;
-  const ProcessResult run =
-      run_blender_job(options.executable, options.script, job_path, "blender (" + options.executable + ")", popts,
-                      options.threads);
-  const fs::path error_file = raw / "error.json";
-  if (fs::exists(error_file)) {
-    // The script reports spec errors with their location in the scene file.
-    Json err;
-    try {
-      err = Json::parse(read_file(error_file.string()));
-    } catch (const Json::exception&) {
-    }
-    if (err.is_object() && err.contains("where") && err.contains("what"))
-      throw InputError(err["where"].get<std::string>(), err["what"].get<std::string>());
+  std::vector<std::thread> workers;
+  std::vector<ProcessResult> results(parts.size());
+  std::vector<std::exception_ptr> errors(parts.size());
+  const auto start = std::chrono::steady_clock::now();
+  for (size_t k = 0; k < parts.size(); ++k) {
+    const RenderPart& part = parts[k];
+    Json part_job = job;
+    Json views = Json::array();
+    for (int i = part.first_view; i < part.end_view; ++i) views.push_back(job["camera"]["views"][size_t(i)]);
+    part_job["camera"]["views"] = views;
+    part_job["output_dir"] = part.out.string();
+    write_file_atomic(part.job.string(), part_job.dump(1));
+    workers.emplace_back([&, k] {
+      try {
+        ProcessOptions popts;
+        popts.log_path = parts[k].log.string();
+        popts.timeout_s = options.timeout_s;
+        results[k] = run_blender_job(options.executable, options.script, parts[k].job.string(),
+                                     "blender (" + options.executable + ")", popts, parts[k].threads);
+      } catch (...) {
+        errors[k] = std::current_exception();
+      }
+    });
   }
-  if (run.exit_code != 0)
-    throw InputError("blender (" + options.executable + ")",
-                     "rendering " + scene.name + "/" + variant.name + " failed with exit code " +
-                         std::to_string(run.exit_code) + "; last lines of its log:\n" + tail_of_file(log_path));
+  for (std::thread& t : workers) t.join();
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+  const double render_seconds = seconds_since(start);
+  for (size_t k = 0; k < parts.size(); ++k) {
+    const fs::path error_file = parts[k].out / "error.json";
+    if (fs::exists(error_file)) {
+      // The script reports spec errors with their location in the scene file.
+      Json err;
+      try {
+        err = Json::parse(read_file(error_file.string()));
+      } catch (const Json::exception&) {
+      }
+      if (err.is_object() && err.contains("where") && err.contains("what"))
+        throw InputError(err["where"].get<std::string>(), err["what"].get<std::string>());
+    }
+    if (results[k].exit_code != 0)
+      throw InputError("blender (" + options.executable + ")",
+                       "rendering " + scene.name + "/" + variant.name + " failed with exit code " +
+                           std::to_string(results[k].exit_code) + "; last lines of its log (" + parts[k].log.string() +
+                           "):\n" + tail_of_file(parts[k].log.string()));
+  }
 
   // Blender's own account of the cameras it rendered with must match the path we asked for.
-  const std::string rendered_cameras = (raw / layout::kCamerasJson).string();
-  std::vector<Camera> rendered = read_cameras_json(rendered_cameras);
-  if (rendered.size() != cameras.size())
-    throw InputError(rendered_cameras, "Blender wrote " + std::to_string(rendered.size()) +
-                                                          " cameras, expected " + std::to_string(cameras.size()));
+  std::vector<Camera> rendered;
+  std::vector<fs::path> part_of_view;
+  for (const RenderPart& part : parts) {
+    const std::string rendered_cameras = (part.out / layout::kCamerasJson).string();
+    const std::vector<Camera> got = read_cameras_json(rendered_cameras);
+    if (int(got.size()) != part.end_view - part.first_view)
+      throw InputError(rendered_cameras, "Blender wrote " + std::to_string(got.size()) + " cameras, expected " +
+                                             std::to_string(part.end_view - part.first_view));
+    for (const Camera& c : got) rendered.push_back(c), part_of_view.push_back(part.out);
+  }
+  const std::string rendered_cameras = (parts.front().out / layout::kCamerasJson).string();
   for (size_t i = 0; i < cameras.size(); ++i) {
     const Camera &a = cameras[i], &b = rendered[i];
     const double pose = (a.camera_from_world - b.camera_from_world).cwiseAbs().maxCoeff();
@@ -172,15 +237,18 @@ RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& va
   ds.root = root.string();
   for (ImageKind k : {ImageKind::kClean, ImageKind::kImages, ImageKind::kDepth}) fs::create_directories(ds.dir(k));
   std::vector<std::string> names;
-  for (const Camera& cam : rendered) {
-    const fs::path png = raw / kRawImagesDir / (cam.name + layout::kImageExt);
+  for (size_t i = 0; i < rendered.size(); ++i) {
+    const Camera& cam = rendered[i];
+    const fs::path png = part_of_view[i] / kRawImagesDir / (cam.name + layout::kImageExt);
     const Image img = read_image(png.string());
     if (img.width != cam.width || img.height != cam.height)
       throw InputError(png.string(), "expected " + std::to_string(cam.width) + "x" + std::to_string(cam.height) +
                                          ", got " + img.to_string());
-    fs::rename(png, ds.path(ImageKind::kClean, cam.name));
+    // Re-encoded rather than moved: Blender's PNGs carry the render's date and timings as metadata,
+    // so two renders of identical pixels would be different files.
+    write_image(ds.path(ImageKind::kClean, cam.name), img);
     link_or_copy(ds.path(ImageKind::kClean, cam.name), ds.path(ImageKind::kImages, cam.name));
-    const std::string raw_depth = (raw / kRawDepthDir / (cam.name + layout::kDepthExt)).string();
+    const std::string raw_depth = (part_of_view[i] / kRawDepthDir / (cam.name + layout::kDepthExt)).string();
     Image depth = read_depth(raw_depth);
     if (depth.width != cam.width || depth.height != cam.height)
       throw InputError(raw_depth, "depth size differs from the image");
@@ -192,13 +260,22 @@ RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& va
   }
 
   RenderSummary summary;
-  summary.seconds = run.seconds;
+  summary.seconds = render_seconds;
   summary.views = int(rendered.size());
-  const JsonReader log = JsonReader::from_file((raw / "render_log.json").string());
-  summary.objects = log.get<int>("objects");
-  if (log.value().contains("view_seconds") && !log.value()["view_seconds"].empty())
-    summary.first_view_s = log.value()["view_seconds"][0].get<double>();
-  fs::rename(raw / "render_log.json", root / "logs" / "render_log.json");
+  summary.processes = int(parts.size());
+  // One render log for the whole render: the parts' view timings in view order.
+  Json log_all = {{"processes", parts.size()}, {"view_seconds", Json::array()}, {"parts", Json::array()}};
+  for (const RenderPart& part : parts) {
+    const JsonReader log = JsonReader::from_file((part.out / "render_log.json").string());
+    summary.objects = log.get<int>("objects");
+    for (const Json& t : log.value()["view_seconds"]) log_all["view_seconds"].push_back(t);
+    log_all["parts"].push_back(log.value());
+  }
+  log_all["blender"] = log_all["parts"][0].value("blender", "");
+  log_all["engine"] = log_all["parts"][0].value("engine", "");
+  log_all["objects"] = summary.objects;
+  if (!log_all["view_seconds"].empty()) summary.first_view_s = log_all["view_seconds"][0].get<double>();
+  write_file_atomic((root / "logs" / "render_log.json").string(), log_all.dump(1));
   fs::remove_all(raw);
 
   // Lens data is ours, not Blender's (it renders a pinhole; the generator applies the lens): carry it over.
@@ -215,7 +292,7 @@ RenderSummary render_clean_dataset(const SceneSpec& scene, const std::string& va
   ds.info.splits_rule = scene.split_every == 8 ? std::string(kLlffSplitRule)
                                                : "llff_every_" + std::to_string(scene.split_every);
   // The render's own entries of the generator block (later stages add theirs, docs/scenes.md).
-  ds.info.generator = Json{{"stages", {{{"name", "blender"}, {"seconds", run.seconds}}}},
+  ds.info.generator = Json{{"stages", {{{"name", "blender"}, {"seconds", render_seconds}}}},
                            {"profile", profile.name},
                            {"variant", variant.name},
                            {"surface", variant.surface}};

@@ -19,9 +19,10 @@ struct BlenderOptions {
   double timeout_s = 0;  // 0 = no limit
   // Only the first `max_views` views of the profile (0 = all): tests and previews.
   int max_views = 0;
-  // Threads Blender may use (0 = all cores, Blender's default): its `-t` and, for EEVEE's software
-  // OpenGL, llvmpipe's LP_NUM_THREADS. `weathergs -j N generate` sets it to N. Renders differ only
-  // by llvmpipe's thread-timing noise (render_repeatability_test).
+  // Threads Blender may use (0 = all cores): a Cycles render runs as that many one-thread processes
+  // side by side, each on its own views, so its pixels never depend on it; EEVEE runs as one process
+  // with `-t` and llvmpipe's LP_NUM_THREADS set to it (and is not repeatable under any setting).
+  // `weathergs --threads N generate` sets it to N.
   int threads = 0;
 
   void validate() const;  // InputError naming the field (executable and script set, timeout, max_views and threads >= 0)
@@ -49,6 +50,7 @@ struct RenderSummary {
   double seconds = 0;        // wall time of the Blender process
   double first_view_s = 0;   // includes EEVEE's shader compilation
   int views = 0, objects = 0;
+  int processes = 1;         // Blender processes side by side (one-thread Cycles processes)
 };
 
 // Renders a clean dataset of `variant` (its surface state and lights, no airborne weather) into

@@ -1,9 +1,5 @@
 #include "capture/colmap.h"
 
-#include <sqlite3.h>
-
-#include <memory>
-
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -14,9 +10,12 @@
 #include "core/atomic_file.h"
 #include "core/colmap_model.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
 #include "core/dataset_layout.h"
 #include "core/error.h"
+#include "capture/colmap_database.h"
 #include "capture/process.h"
+#include "capture/sift_matcher.h"
 
 namespace weathergs::capture {
 
@@ -39,58 +38,46 @@ void run_colmap(const ColmapOptions& o, const std::string& command, std::vector<
 
 std::string threads(const ColmapOptions& o) { return std::to_string(o.num_threads); }
 
-void extract_and_match(const ColmapOptions& o, const std::string& db, const std::string& image_dir,
-                       const std::string& list_path, const std::vector<std::string>& camera_args, bool sequential,
-                       const std::string& log) {
+// SIFT extraction. On one thread COLMAP's extraction repeats (same keypoints, descriptors and
+// image ids in list order), which the benchmark's known-pose models need; with more threads the ids
+// follow completion order.
+void extract(const ColmapOptions& o, const std::string& db, const std::string& image_dir, const std::string& list_path,
+             const std::vector<std::string>& camera_args, const std::string& num_threads, const std::string& log) {
   std::vector<std::string> fe = {"--database_path", db, "--image_path", image_dir, "--image_list_path", list_path,
                                  "--ImageReader.camera_model", "PINHOLE", "--ImageReader.single_camera", "1",
-                                 "--SiftExtraction.use_gpu", "0", "--SiftExtraction.num_threads", threads(o)};
+                                 "--SiftExtraction.use_gpu", "0", "--SiftExtraction.num_threads", num_threads};
   fe.insert(fe.end(), camera_args.begin(), camera_args.end());
   run_colmap(o, "feature_extractor", fe, log);
+}
+
+// Footage of unknown poses keeps COLMAP's own matchers (the mapper is not deterministic anyway).
+void extract_and_match(const ColmapOptions& o, const std::string& db, const std::string& image_dir,
+                       const std::string& list_path, bool sequential, const std::string& log) {
+  extract(o, db, image_dir, list_path, {}, threads(o), log);
   run_colmap(o, sequential ? "sequential_matcher" : "exhaustive_matcher",
              {"--database_path", db, "--SiftMatching.use_gpu", "0", "--SiftMatching.num_threads", threads(o)}, log);
+}
+
+// Exhaustive matching that repeats bit for bit (capture/sift_matcher.h), then COLMAP's geometric
+// verification of those matches (matches_importer, repeatable with any thread count).
+void match_exhaustive_deterministic(const ColmapOptions& o, const std::string& db, const std::string& work_dir,
+                                    const std::string& log) {
+  const std::string list = (fs::path(work_dir) / "matches.txt").string();
+  write_exhaustive_match_list(db, list, SiftMatchOptions{});
+  run_colmap(o, "matches_importer",
+             {"--database_path", db, "--match_list_path", list, "--match_type", "raw", "--SiftMatching.use_gpu", "0",
+              "--SiftMatching.num_threads", threads(o)},
+             log);
 }
 
 struct DbImage {
   int image_id = 0, camera_id = 0;
 };
 
-// COLMAP's database, read-only through SQLite's C API.
-class Database {
- public:
-  explicit Database(const std::string& path) : path_(path) {
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-      const std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
-      sqlite3_close(db_);
-      throw InputError(path, "cannot open COLMAP's database: " + msg);
-    }
-  }
-  ~Database() { sqlite3_close(db_); }
-  Database(const Database&) = delete;
-  Database& operator=(const Database&) = delete;
-
-  // Runs `sql` and calls row(stmt) for each result row.
-  template <typename F>
-  void query(const char* sql, F&& row) const {
-    sqlite3_stmt* raw = nullptr;
-    if (sqlite3_prepare_v2(db_, sql, -1, &raw, nullptr) != SQLITE_OK)
-      throw InputError(path_, std::string("cannot query COLMAP's database (") + sql + "): " + sqlite3_errmsg(db_));
-    const std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> stmt(raw, sqlite3_finalize);
-    int rc;
-    while ((rc = sqlite3_step(raw)) == SQLITE_ROW) row(raw);
-    if (rc != SQLITE_DONE)
-      throw InputError(path_, std::string("reading COLMAP's database (") + sql + ") failed: " + sqlite3_errmsg(db_));
-  }
-
- private:
-  std::string path_;
-  sqlite3* db_ = nullptr;
-};
-
-// IMAGE_IDs come from the database: extraction is multi-threaded, so ids are not in name order.
+// IMAGE_IDs come from the database: they are not in name order in general.
 std::map<std::string, DbImage> read_image_ids(const std::string& db) {
   std::map<std::string, DbImage> ids;
-  Database(db).query("SELECT image_id, camera_id, name FROM images;", [&](sqlite3_stmt* st) {
+  ColmapDatabase(db).query("SELECT image_id, camera_id, name FROM images;", [&](sqlite3_stmt* st) {
     const unsigned char* name = sqlite3_column_text(st, 2);
     if (!name) throw InputError(db, "an image row without a name");
     ids[reinterpret_cast<const char*>(name)] = {sqlite3_column_int(st, 0), sqlite3_column_int(st, 1)};
@@ -100,7 +87,7 @@ std::map<std::string, DbImage> read_image_ids(const std::string& db) {
 
 int64_t count_verified_matches(const std::string& db) {
   int64_t n = 0;
-  Database(db).query("SELECT COALESCE(SUM(rows), 0) FROM two_view_geometries;",
+  ColmapDatabase(db).query("SELECT COALESCE(SUM(rows), 0) FROM two_view_geometries;",
                      [&](sqlite3_stmt* st) { n = sqlite3_column_int64(st, 0); });
   return n;
 }
@@ -172,7 +159,8 @@ TriangulationResult triangulate_known_poses(const std::vector<Camera>& cameras, 
   std::ostringstream params;
   params.precision(17);
   params << c0.fx << "," << c0.fy << "," << c0.cx << "," << c0.cy;
-  extract_and_match(o, db, image_dir, list_path, {"--ImageReader.camera_params", params.str()}, false, log);
+  extract(o, db, image_dir, list_path, {"--ImageReader.camera_params", params.str()}, "1", log);
+  match_exhaustive_deterministic(o, db, work_dir, log);
 
   const std::map<std::string, DbImage> ids = read_image_ids(db);
   // point_triangulator aborts in bundle adjustment when nothing can be triangulated: say why instead.
@@ -249,7 +237,7 @@ MapperResult map_unknown_poses(const std::string& image_dir, const std::string& 
   const std::string list_path = (fs::path(work_dir) / "image_list.txt").string();
   write_file_atomic(list_path, list);
   // Exhaustive matching up to 150 frames (a few minutes on 2 cores); sequential beyond (video order).
-  extract_and_match(o, db, image_dir, list_path, {}, names.size() > 150, log);
+  extract_and_match(o, db, image_dir, list_path, names.size() > 150, log);
   const fs::path sparse = fs::path(work_dir) / "sparse";
   fs::create_directories(sparse);
   // Robust settings for sparse wide-baseline views (ENVIRONMENT.md).
@@ -339,6 +327,8 @@ TriangulationResult triangulate_dataset(const std::string& dataset_dir, const Tr
   AtomicDirectory out(model);
   TriangulationResult r = triangulate_known_poses(cameras, image_dir, logs, out.path(), o.colmap);
   out.commit();
+  // The dataset's own model changed: so did its identity (a model written elsewhere leaves it alone).
+  if (o.model_dir.empty()) record_dataset_identity(dataset_dir);
   if (model_dir_out) *model_dir_out = model;
   return r;
 }

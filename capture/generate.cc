@@ -8,6 +8,8 @@
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
+#include "core/version.h"
 #include "core/error.h"
 #include "core/file_lock.h"
 #include "core/progress.h"
@@ -28,7 +30,7 @@ Json stats_json(const ModelStats& s) {
 }
 
 // Bumped whenever the meaning of a cached render changes without the job or the scripts changing.
-constexpr const char* kCacheVersion = "weathergs-clean-cache-v2";
+constexpr const char* kCacheVersion = "weathergs-clean-cache-v3";
 
 std::string cache_key(const SceneSpec& scene, const std::string& variant, const GenerateOptions& o) {
   const VariantSpec v = scene.variant(variant);
@@ -54,13 +56,71 @@ std::string cache_key(const SceneSpec& scene, const std::string& variant, const 
   return h.hex_digest().substr(0, 24);
 }
 
+// The tools that made the dataset at root: Blender's version from its render log, COLMAP's by asking.
+ToolVersions tools_of(const std::string& cache_entry, const GenerateOptions& o) {
+  ToolVersions t;
+  const fs::path log = fs::path(cache_entry) / layout::kLogsDir / "render_log.json";
+  if (fs::exists(log)) t.blender = Json::parse(read_file(log.string())).value("blender", "");
+  if (o.colmap) t.colmap = colmap_version(o.colmap_options.executable);
+  return t;
+}
+
+std::string describe(const ToolVersions& t) {
+  return "Blender " + (t.blender.empty() ? "?" : t.blender) + ", " + (t.colmap.empty() ? "no COLMAP" : t.colmap);
+}
+
+// Records the dataset's identity and holds it against the expected one (GenerateOptions). Writes
+// dataset.json's identity and generator.identity_check; throws InputError on a mismatch unless allowed.
+void check_identity(const SceneSpec& scene, const std::string& variant, const GenerateOptions& o,
+                    const std::string& root, GenerateSummary& s) {
+  const DatasetIdentity id = record_dataset_identity(root);
+  s.identity = id.sha256;
+  const std::string name = scene.name + "_" + variant;
+  const std::string path = expected_identities_path(scene.file, o.profile);
+  DatasetInfo info = read_dataset_json((fs::path(root) / layout::kDatasetJson).string());
+  GenerationSettings settings;
+  settings.weather_spec = info.generator && info.generator->contains("spec") ? info.generator->at("spec") : Json();
+  settings.max_views = o.blender.max_views;
+  settings.targets = o.targets;
+  settings.colmap = o.colmap;
+  const ToolVersions found = tools_of(s.cache_entry, o);
+  Json check = {{"expected_file", path}, {"tools", found.to_json()}};
+  if (o.record_expected) {
+    write_expected_identity(path, o.profile, {name, settings, found, source_commit(), id});
+    s.identity_check = "recorded";
+  } else if (const std::optional<ExpectedIdentity> want = read_expected_identity(path, name); !want) {
+    s.identity_check = "no expected identity";
+  } else if (!(want->settings == settings)) {
+    s.identity_check = "not checked: other settings than the expected identity's";
+  } else if (want->identity.sha256 == id.sha256) {
+    s.identity_check = "matches";
+  } else {
+    const std::string first = first_difference(id, want->identity).value_or("?");
+    check["expected"] = want->identity.sha256;
+    check["first_difference"] = first;
+    if (!o.allow_identity_mismatch)
+      throw InputError(path, name + " (" + o.profile + " profile) is not the benchmark's dataset: identity " +
+                                 id.sha256.substr(0, 12) + " where " + want->identity.sha256.substr(0, 12) +
+                                 " is expected; first difference: " + first + ". Expected made with " +
+                                 describe(want->made_with) + " (weathergs " + want->weathergs_commit + "), found " +
+                                 describe(found) +
+                                 ". Pass --allow-identity-mismatch to keep this dataset anyway (its dataset.json says so)");
+    s.identity_check = "mismatch allowed";
+  }
+  check["result"] = s.identity_check;
+  Json gen = info.generator ? *info.generator : Json::object();
+  gen["identity_check"] = check;
+  info.generator = gen;
+  write_dataset_json((fs::path(root) / layout::kDatasetJson).string(), info);
+}
+
 }  // namespace
 
 Json GenerateSummary::to_json() const {
   return {{"scene", scene}, {"variant", variant}, {"out_dir", out_dir}, {"cache_entry", cache_entry},
           {"cache_hit", cache_hit}, {"views", views}, {"render_seconds", render_s}, {"weather_seconds", weather_s},
           {"colmap_seconds", colmap_s}, {"total_seconds", total_s}, {"sparse", stats_json(sparse)},
-          {"sparse_clean", stats_json(sparse_clean)}};
+          {"sparse_clean", stats_json(sparse_clean)}, {"identity", identity}, {"identity_check", identity_check}};
 }
 
 void GenerateOptions::validate() const {
@@ -195,6 +255,7 @@ GenerateSummary generate_variant(const std::string& scene_path, const std::strin
   if (o.colmap) gen["colmap"] = {{"sparse", stats_json(s.sparse)}, {"sparse_clean", stats_json(s.sparse_clean)}};
   ds.info.generator = gen;
   write_dataset_json(ds.file(layout::kDatasetJson), ds.info);
+  check_identity(scene, variant.name, o, root.string(), s);
   out.commit();
   s.total_s = seconds_since(start);
   return s;

@@ -13,6 +13,7 @@
 
 #include "capture/blender.h"
 #include "capture/colmap.h"
+#include "capture/expected_identity.h"
 #include "generator/weather_spec.h"
 
 namespace weathergs::capture {
@@ -26,6 +27,13 @@ struct GenerateOptions {
   bool colmap = true;            // sparse/0 and sparse_clean/0 exports
   bool targets = false;          // the weather's restoration targets (targets/, docs/generator.md)
   std::optional<generator::WeatherStyle> style;  // overrides the variants' weather style (physical or paper)
+  // The expected identities (scenes/expected/<profile>.json beside the scene file): a variant made
+  // with the settings of an entry must reproduce its identity, else generate fails (exit 2) naming
+  // the first differing file; allow_identity_mismatch keeps such a dataset, recording the mismatch in
+  // its dataset.json. record_expected writes the variant's identity into that file instead (for
+  // whoever changes the benchmark on purpose).
+  bool allow_identity_mismatch = false;
+  bool record_expected = false;
   BlenderOptions blender;
   ColmapOptions colmap_options;
 
@@ -38,6 +46,8 @@ struct GenerateSummary {
   int views = 0;
   double render_s = 0, weather_s = 0, colmap_s = 0, total_s = 0;
   ModelStats sparse, sparse_clean;
+  std::string identity;        // the dataset's identity (sha256)
+  std::string identity_check;  // "matches", "recorded", "mismatch allowed", "no expected identity", ...
   Json to_json() const;
 };
 

@@ -10,6 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
 #include "core/progress.h"
 #include "core/error.h"
 #include "capture/exports.h"
@@ -147,6 +148,7 @@ ImportSummary import_footage(const ImportOptions& o, const std::string& out_dir)
   ds.info.source = source;
   write_dataset(ds);
   write_transforms_json(ds.file(layout::kTransformsJson), ds.cameras);
+  record_dataset_identity(root.string());
   out.commit();
   return summary;
 }

@@ -9,6 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/constants.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
 #include "core/error.h"
 #include "core/sha256.h"
 
@@ -138,6 +139,7 @@ PhotoSceneSummary make_photo_scene(const PhotoSceneOptions& o, const std::string
                                    {"backdrop_m", o.backdrop_m}}},
                         {"recipe", "weathergs photo-scene (docs/scenes.md)"}};
   write_dataset(ds);
+  record_dataset_identity(out.path());
   out.commit();
   return summary;
 }

@@ -192,6 +192,14 @@ constexpr auto kDatasetFields = [](auto& d, auto& f) {
         if (!r.has(k)) return r.mark(k);
         d.source = r.child(k).value();
       });
+  f.custom(
+      "identity", [&] { return d.identity ? *d.identity : Json(Json::value_t::discarded); },
+      [&](const JsonReader& r, const std::string& k) {
+        if (!r.has(k)) return r.mark(k);
+        const JsonReader g = r.child(k);
+        if (!g.is_object()) throw InputError(g.where(), "expected an object {scheme, sha256, file_count, files}");
+        d.identity = g.value();
+      });
 };
 }  // namespace
 

@@ -23,6 +23,9 @@ struct DatasetInfo {
   std::optional<std::string> splits_rule;                   // e.g. "llff_every_8"
   std::optional<Json> generator;  // owned by the generator: {version, seed, spec, stages, ...}
   std::optional<Json> source;     // imported footage: where the frames came from
+  // The dataset's identity as written when it was made (core/dataset_identity.h: DatasetIdentity's
+  // to_json with its files): a reader compares it with compute_dataset_identity of the files.
+  std::optional<Json> identity;
 };
 
 struct Dataset {

@@ -9,6 +9,7 @@
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
 #include "core/error.h"
 #include "core/image.h"
 #include "core/parallel.h"
@@ -272,6 +273,7 @@ Json run_weather(const std::string& clean_dir, const JsonReader& spec_reader, co
   result.info.splits_rule = clean.info.splits_rule;
   result.info.generator = block;
   write_dataset(result);
+  record_dataset_identity(root.string());
   out.commit();
   return block;
 }

@@ -9,17 +9,21 @@ from .spec import SpecError
 # Geometry: every object gets its own small mesh with its real dimensions (object coordinates are
 # meters), built with bmesh, which is far faster than bpy.ops for hundreds of objects.
 
+# Every face is flat-shaded and curved surfaces are tessellated this much more finely instead of
+# smooth-shaded: Blender's smooth normals differ in their last float bits from one process to the
+# next (so did 2-3 % of a render's pixels), and a benchmark's render must repeat bit for bit
+# (docs/scenes.md, "Repeatability").
+CURVED_SEGMENT_FACTOR = 2
+
+
 class Builder:
     def __init__(self, materials, collection):
         self.materials = materials
         self.collection = collection
         self.count = 0
 
-    def _object(self, name, bm, material, location, rotation, smooth):
+    def _object(self, name, bm, material, location, rotation):
         mesh = bpy.data.meshes.new(name)
-        if smooth:
-            for f in bm.faces:
-                f.smooth = abs(f.normal.z) < 0.99 if smooth == "sides" else True
         bm.to_mesh(mesh)
         bm.free()
         if material not in self.materials:
@@ -36,17 +40,18 @@ class Builder:
         bm = bmesh.new()
         bmesh.ops.create_cube(bm, size=1.0)
         bmesh.ops.scale(bm, vec=Vector(size), verts=bm.verts)
-        return self._object(name, bm, material, location, rotation, False)
+        return self._object(name, bm, material, location, rotation)
 
     def cylinder(self, material, radius, depth, location, rotation=(0, 0, 0), segments=16, radius2=None,
                  name="cylinder"):
         bm = bmesh.new()
-        bmesh.ops.create_cone(bm, cap_ends=True, cap_tris=False, segments=segments, radius1=radius,
-                              radius2=radius if radius2 is None else radius2, depth=depth)
-        return self._object(name, bm, material, location, rotation, "sides")
+        bmesh.ops.create_cone(bm, cap_ends=True, cap_tris=False, segments=segments * CURVED_SEGMENT_FACTOR,
+                              radius1=radius, radius2=radius if radius2 is None else radius2, depth=depth)
+        return self._object(name, bm, material, location, rotation)
 
     def sphere(self, material, radius, location, scale=(1, 1, 1), segments=16, name="sphere"):
         bm = bmesh.new()
+        segments *= CURVED_SEGMENT_FACTOR
         bmesh.ops.create_uvsphere(bm, u_segments=segments, v_segments=max(6, segments // 2), radius=radius)
         bmesh.ops.scale(bm, vec=Vector(scale), verts=bm.verts)
-        return self._object(name, bm, material, location, (0, 0, 0), True)
+        return self._object(name, bm, material, location, (0, 0, 0))

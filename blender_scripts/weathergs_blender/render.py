@@ -86,6 +86,12 @@ def setup_render(render, out_dir, depth_dir):
         scene.render.image_settings.color_mode = "RGB"
         scene.render.image_settings.color_depth = "8"
     scene.render.dither_intensity = 0.0  # dithering is noise: keep renders of one view identical
+    # No metadata in the written files: the date and render times would make every render a new file
+    # (the C++ side re-encodes the PNGs as well).
+    scene.render.use_stamp = False
+    for key in dir(scene.render):
+        if key.startswith("use_stamp_") and isinstance(getattr(scene.render, key), bool):
+            setattr(scene.render, key, False)
     scene.view_settings.view_transform = "Standard"
     scene.view_settings.look = "None"
     scene.view_settings.exposure = render.get("exposure_ev", 0.0)
