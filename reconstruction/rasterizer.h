@@ -102,4 +102,14 @@ void rasterize_backward(const GaussianSet<T>& g, const RasterCamera<T>& camera, 
                         RasterState<T>* state, const std::vector<T>& v_image, GaussianSet<T>* grad,
                         std::vector<T>* v_mean2d_ndc = nullptr);
 
+// The largest blend weight alpha * T (the share of a pixel's colour it gives) that each Gaussian
+// has at any pixel of the image the last forward pass rendered, in `weights` (N; 0 where it blends
+// nowhere). A separate replay of the training forward's per-pixel blend, so that a forward pass
+// costs nothing more when nobody asks; it reads only the tile lists and records, which both
+// RasterOutputs write alike. A maximum does not depend on the order the tiles run in: the same bits
+// with any thread count. What Mini-Splatting's simplification ranks Gaussians by (the trainer's
+// blend-weight prune, trainer.h).
+template <typename T>
+void max_blend_weights(const RasterState<T>& state, std::vector<T>* weights);
+
 }  // namespace weathergs::reconstruction

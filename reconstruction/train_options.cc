@@ -42,6 +42,14 @@ void TrainOptions::validate(const std::string& where) const {
   if (large_prune_from < 0) fail("large_prune_from", std::to_string(large_prune_from), "must be >= 0");
   if (opacity_reset_interval < 1)
     fail("opacity_reset_interval", std::to_string(opacity_reset_interval), "must be >= 1");
+  if (position_lr_hold_until < 0)
+    fail("position_lr_hold_until", std::to_string(position_lr_hold_until), "must be >= 0");
+  for (size_t k = 0; k < blend_prune_at.size(); ++k)
+    if (blend_prune_at[k] < 1 || (k > 0 && blend_prune_at[k] <= blend_prune_at[k - 1]))
+      fail("blend_prune_at[" + std::to_string(k) + "]", std::to_string(blend_prune_at[k]),
+           "iterations must be >= 1 and strictly ascending");
+  if (!(blend_prune_threshold > 0 && blend_prune_threshold < 1))
+    fail("blend_prune_threshold", std::to_string(blend_prune_threshold), "must be in (0, 1)");
   if (!(min_opacity >= 0 && min_opacity < 1)) fail("min_opacity", std::to_string(min_opacity), "must be in [0, 1)");
   for (int c = 0; c < 3; ++c)
     if (!(background[c] >= 0 && background[c] <= 1))
@@ -82,6 +90,9 @@ constexpr auto kFields = [](auto& s, auto& f) {
   f("lambda_dssim", s.lambda_dssim);
   f("position_lr_init", s.position_lr_init);
   f("position_lr_final", s.position_lr_final);
+  // The fields of the compressed schedule are written only when set, so that every record and
+  // checkpoint of the other schedules keeps its bytes.
+  f("position_lr_hold_until", s.position_lr_hold_until, OmitIf{0});
   f("feature_lr", s.feature_lr);
   f("opacity_lr", s.opacity_lr);
   f("scaling_lr", s.scaling_lr);
@@ -97,6 +108,18 @@ constexpr auto kFields = [](auto& s, auto& f) {
   f("densification_interval", s.densification_interval);
   f("densify_grad_threshold", s.densify_grad_threshold);
   f("opacity_reset_interval", s.opacity_reset_interval);
+  f.custom(
+      "blend_prune_at",
+      [&] { return s.blend_prune_at.empty() ? Json(Json::value_t::discarded) : Json(s.blend_prune_at); },
+      [&](const JsonReader& r, const std::string& k) {
+        r.mark(k);
+        if (!r.has(k)) return;
+        const JsonReader a = r.child(k);
+        if (!a.is_array()) throw InputError(a.where(), "expected an array of iterations");
+        s.blend_prune_at.clear();
+        for (size_t i = 0; i < a.size(); ++i) s.blend_prune_at.push_back(a.at(i).as<int>());
+      });
+  f("blend_prune_threshold", s.blend_prune_threshold, OmitIf{TrainOptions().blend_prune_threshold});
   f.custom(
       "schedule", [&] { return Json(to_string(s.schedule)); },
       [&](const JsonReader& r, const std::string& k) {

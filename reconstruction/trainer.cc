@@ -108,8 +108,12 @@ int Trainer::view_for_iteration(int iteration) const {
 }
 
 double Trainer::position_lr(int iteration) const {
-  // get_expon_lr_func with no delay: log-linear from init to final over the run.
-  const double t = std::clamp(double(iteration) / options_.iterations, 0.0, 1.0);
+  // get_expon_lr_func with no delay: log-linear from init to final over the run, or over what is
+  // left of it after position_lr_hold_until (0 gives the reference's expression exactly).
+  const int hold = options_.position_lr_hold_until;
+  const double t = hold >= options_.iterations
+                       ? 0.0
+                       : std::clamp(double(iteration - hold) / (options_.iterations - hold), 0.0, 1.0);
   const double lr = std::exp(std::log(options_.position_lr_init) * (1 - t) + std::log(options_.position_lr_final) * t);
   return lr * extent_;
 }
@@ -257,8 +261,51 @@ IterationStats Trainer::step() {
     WGS_CHECK(!"Adam reported a non-finite value that the scans did not find");
   }
   parameters_checked_ = !skip_adam;
+  // The blend-weight prune only removes rows: what is left is as Adam (or densification) left it.
+  if (std::binary_search(options_.blend_prune_at.begin(), options_.blend_prune_at.end(), it))
+    prune_by_blend_weight(options_.blend_prune_threshold);
   stats.num_gaussians = int64_t(g_.size());
   return stats;
+}
+
+int64_t Trainer::prune_by_blend_weight(double threshold) {
+  const size_t n = g_.size();
+  std::vector<float> best(n, 0.f), w;
+  RasterSettings<float> rs;
+  rs.sh_degree = sh_degree_;  // the weights do not depend on the colours; the image is not used
+  rs.outputs = RasterOutputs::kImage;
+  RasterState<float> st;
+  const bool subset = num_distractors_ > 0;
+  for (size_t v = 0; v < views_.size(); ++v) {
+    if (subset) {
+      rows_for_view(owner_, int(v), &rows_);
+      gather_rows(g_, rows_, &sub_);
+    }
+    rasterize_forward(subset ? sub_ : g_, RasterCamera<float>::from(views_[v].camera), rs, &st);
+    max_blend_weights(st, &w);
+    for (size_t k = 0; k < w.size(); ++k) {
+      const size_t i = subset ? size_t(rows_[k]) : k;
+      best[i] = std::max(best[i], w[k]);
+    }
+  }
+  std::vector<char> keep(n);
+  for (size_t i = 0; i < n; ++i) keep[i] = best[i] >= float(threshold);
+  auto keep_rows = [&](auto& a) {
+    size_t kept = 0;
+    for (size_t i = 0; i < n; ++i)
+      if (keep[i]) a[kept++] = a[i];
+    a.resize(kept);
+  };
+  g_.keep(keep);
+  adam_m_.keep(keep);
+  adam_v_.keep(keep);
+  keep_rows(grad_accum_);
+  keep_rows(grad_count_);
+  keep_rows(max_radii_);
+  keep_rows(owner_);
+  num_distractors_ = 0;
+  for (const int32_t o : owner_) num_distractors_ += o != kSceneOwner;
+  return int64_t(n - g_.size());
 }
 
 bool Trainer::adam_step() {

@@ -31,6 +31,11 @@ struct TrainOptions {
   double lambda_dssim = kLambdaDssim;
   double position_lr_init = 1.6e-4;   // times the scene extent; log-linear decay over `iterations`
   double position_lr_final = 1.6e-6;
+  // The position learning rate stays at position_lr_init up to this iteration, then decays
+  // log-linearly to position_lr_final at the end of the run, so that a short run's Gaussians still
+  // move at the full rate while densification places them (Mini-Splatting2's compressed schedule).
+  // 0 (default, the reference): the decay starts at iteration 0. Taken as given in every schedule.
+  int position_lr_hold_until = 0;
   double feature_lr = 2.5e-3;         // SH DC; the higher SH coefficients use feature_lr / 20
   double opacity_lr = 0.025;
   double scaling_lr = 5e-3;
@@ -44,6 +49,14 @@ struct TrainOptions {
   int densification_interval = 100;
   double densify_grad_threshold = 2e-4;  // mean |dL/d mean2d| in NDC units
   int opacity_reset_interval = 3000;
+  // The blend-weight prune (Mini-Splatting's simplification), for schedules without the opacity
+  // reset: at each of these iterations, after its densification and Adam step, every training view
+  // is rendered at full resolution and a Gaussian is removed when its largest blend weight
+  // alpha * T over all their pixels (max_blend_weights, rasterizer.h) is below
+  // blend_prune_threshold: it gives no pixel more than that share of its colour. Ascending, each
+  // >= 1; taken as given in every schedule. Empty (default): never.
+  std::vector<int> blend_prune_at;
+  double blend_prune_threshold = 0.01;
   double min_opacity = 0.005;         // prune below
   int max_screen_size_px = 20;        // see docs/reconstruction.md: inert as in the reference
   double max_world_size = 0.1;        // prune scale > this fraction of the extent (after large_prune_from)
@@ -206,6 +219,10 @@ class Trainer {
   // Index into views of the image used at a (1-based) iteration: a fresh permutation every epoch.
   int view_for_iteration(int iteration) const;
   double position_lr(int iteration) const;
+  // The blend-weight prune (TrainOptions::blend_prune_at): renders every training view (with
+  // distractors, each with its own), removes each Gaussian whose largest blend weight over them is
+  // below `threshold`, with its Adam moments and densification statistics; returns how many went.
+  int64_t prune_by_blend_weight(double threshold);
 
   // Checkpoint: parameters, Adam state, densification statistics and the iteration (binary).
   void save_checkpoint(const std::string& path, double train_seconds) const;

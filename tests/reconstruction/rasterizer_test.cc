@@ -379,6 +379,59 @@ TEST(RasterizerTest, ResultsDoNotDependOnThreadCount) {
   EXPECT_EQ(std::memcmp(g1.rotation.data(), g2.rotation.data(), g1.rotation.size() * 4), 0);
 }
 
+// max_blend_weights against the per-pixel loop in double (test_scene.h): exactly in double (the same
+// operations in the same order), and in float within what the float blend's rounding allows. Many
+// Gaussians per pixel, so that transmittance, the 1/255 cut-off and stopped pixels all matter.
+TEST(RasterizerTest, MaxBlendWeightsEqualPerPixelReference) {
+  const Camera c = front_camera(70, 45);
+  const GaussianSet<double> g = random_gaussians<double>(600, 31, 1.0, 0.1, 0.2);
+  const std::vector<double> want = testing::reference_max_blend_weights(g, c);
+  RasterState<double> st;
+  rasterize_forward(g, RasterCamera<double>::from(c), RasterSettings<double>{}, &st);
+  std::vector<double> got;
+  max_blend_weights(st, &got);
+  ASSERT_EQ(got.size(), want.size());
+  int blended = 0, hidden = 0;
+  for (size_t i = 0; i < g.size(); ++i) {
+    EXPECT_NEAR(got[i], want[i], 1e-12) << "Gaussian " << i;
+    blended += want[i] > 0;
+    hidden += want[i] > 0 && want[i] < 0.01;
+  }
+  EXPECT_GT(blended, 300);
+  EXPECT_GT(hidden, 20);  // Gaussians behind others: their weights are the transmittance's doing
+  // Float: alpha and transmittance round at ~1e-7 relative; a Gaussian at the 1/255 cut-off may
+  // flip, which moves its own weight by at most ~1/255 and those behind it by less.
+  constexpr double kFloatTolerance = 5e-3;
+  const GaussianSet<float> gf = g.cast<float>();
+  RasterState<float> sf;
+  rasterize_forward(gf, RasterCamera<float>::from(c), RasterSettings<float>{}, &sf);
+  std::vector<float> got_f;
+  max_blend_weights(sf, &got_f);
+  for (size_t i = 0; i < g.size(); ++i) EXPECT_NEAR(got_f[i], want[i], kFloatTolerance) << "Gaussian " << i;
+}
+
+TEST(RasterizerTest, MaxBlendWeightsDoNotDependOnThreadCountOrOutputs) {
+  const Camera c = front_camera(90, 70);
+  const GaussianSet<float> g = random_gaussians<float>(2000, 8, 1.0, 0.05, 0.2);
+  auto run = [&](int threads, RasterOutputs outputs) {
+    set_num_threads(threads);
+    RasterSettings<float> rs;
+    rs.outputs = outputs;
+    RasterState<float> st;
+    rasterize_forward(g, RasterCamera<float>::from(c), rs, &st);
+    std::vector<float> w;
+    max_blend_weights(st, &w);
+    return w;
+  };
+  const std::vector<float> a = run(1, RasterOutputs::kTraining), b = run(2, RasterOutputs::kTraining);
+  const std::vector<float> d = run(2, RasterOutputs::kImage);
+  set_num_threads(0);
+  ASSERT_EQ(a.size(), g.size());
+  EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * 4), 0);
+  EXPECT_EQ(std::memcmp(a.data(), d.data(), a.size() * 4), 0);
+  EXPECT_GT(*std::max_element(a.begin(), a.end()), 0.5f);
+}
+
 // The 8-lane tile kernels (AVX2) give the bits of the 4-lane ones: image,
 // transmittance, contributor counts and every gradient, on a scene with splats of all sizes, low
 // opacities and a background (so every branch of the blend is taken). Widths the CPU cannot run

@@ -136,6 +136,42 @@ inline Dataset write_synthetic_dataset(const std::string& root, const GaussianSe
   return d;
 }
 
+// The largest blend weight alpha * T of each Gaussian over the pixels of `cam`, by a per-pixel loop
+// in double written independently of the tile kernels: per pixel, every rendered Gaussian whose
+// record's pixel box (the 3-sigma rectangle within the alpha extent) holds it, in (depth, index)
+// order, blended front to back with the reference's cut-offs (alpha < 1/255 skipped, the blend
+// stopping where the transmittance would fall below 1e-4).
+inline std::vector<double> reference_max_blend_weights(const GaussianSet<double>& g, const Camera& cam) {
+  RasterState<double> st;
+  RasterSettings<double> rs;
+  rasterize_forward(g, RasterCamera<double>::from(cam), rs, &st);
+  std::vector<int> order;
+  for (size_t i = 0; i < g.size(); ++i)
+    if (st.radius[i] > 0) order.push_back(int(i));
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return float(st.depth[a]) != float(st.depth[b]) ? float(st.depth[a]) < float(st.depth[b]) : a < b;
+  });
+  std::vector<double> best(g.size(), 0.0);
+  for (int y = 0; y < cam.height; ++y)
+    for (int x = 0; x < cam.width; ++x) {
+      double trans = 1;
+      for (int i : order) {
+        const double* sp = &st.splat[size_t(i) * kSplatFloats];
+        if (x < sp[12] || x > sp[13] || y < sp[14] || y > sp[15]) continue;
+        const double dx = st.mean2d[i * 2] - (x + 0.5), dy = st.mean2d[i * 2 + 1] - (y + 0.5);
+        const double power =
+            -0.5 * (st.conic[i * 3] * dx * dx + st.conic[i * 3 + 2] * dy * dy) - st.conic[i * 3 + 1] * dx * dy;
+        if (power > 0) continue;
+        const double alpha = std::min(0.99, st.opacity[i] * std::exp(power));
+        if (alpha < 1.0 / 255) continue;
+        if (trans * (1 - alpha) < 1e-4) break;
+        best[i] = std::max(best[i], alpha * trans);
+        trans *= 1 - alpha;
+      }
+    }
+  return best;
+}
+
 // Mean PSNR over the dataset's test views of the renders `renders_dir/<view>.png` (8-bit, as
 // `weathergs render` writes them) against the dataset's images.
 inline double mean_test_psnr(const Dataset& d, const std::string& renders_dir) {
