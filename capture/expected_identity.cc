@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -58,10 +59,6 @@ Json GenerationSettings::to_json() const {
   return {{"weather_spec", weather_spec}, {"max_views", max_views}, {"targets", targets}, {"colmap", colmap}};
 }
 
-std::string expected_identities_path(const std::string& scene_file, const std::string& profile) {
-  return (fs::path(scene_file).parent_path() / "expected" / (profile + ".json")).string();
-}
-
 namespace {
 
 JsonReader read_file_checked(const std::string& path) {
@@ -74,6 +71,33 @@ JsonReader read_file_checked(const std::string& path) {
 }
 
 }  // namespace
+
+std::string describe(const ToolVersions& t) {
+  return "Blender " + (t.blender.empty() ? "?" : t.blender) + ", " + (t.colmap.empty() ? "no COLMAP" : t.colmap);
+}
+
+std::vector<ToolVersions> expected_tool_versions(const std::string& expected_dir) {
+  std::vector<fs::path> files;
+  if (fs::is_directory(expected_dir))
+    for (const auto& e : fs::directory_iterator(expected_dir))
+      if (e.path().extension() == ".json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  std::vector<ToolVersions> out;
+  for (const fs::path& f : files) {
+    read_file_checked(f.string());
+    const Json all = Json::parse(read_file(f.string()));
+    for (const auto& [name, entry] : all.at("variants").items()) {
+      ToolVersions t{entry.at("made_with").value("blender", ""), entry.at("made_with").value("colmap", "")};
+      if (std::find(out.begin(), out.end(), t) == out.end()) out.push_back(t);
+    }
+  }
+  return out;
+}
+
+std::string expected_identities_path(const std::string& scene_file, const std::string& profile) {
+  return (fs::path(scene_file).parent_path() / "expected" / (profile + ".json")).string();
+}
+
 
 std::optional<ExpectedIdentity> read_expected_identity(const std::string& path, const std::string& variant) {
   if (!fs::exists(path)) return std::nullopt;

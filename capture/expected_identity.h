@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/dataset_identity.h"
 #include "core/json_reader.h"
@@ -17,6 +18,7 @@ struct ToolVersions {
   std::string blender;  // "3.4.1" (from the render's log)
   std::string colmap;   // "COLMAP 3.8" ("" when generated without COLMAP)
   Json to_json() const;
+  bool operator==(const ToolVersions& o) const { return blender == o.blender && colmap == o.colmap; }
 };
 
 // The first line of `colmap help` ("COLMAP 3.8 -- ..." -> "COLMAP 3.8"); "" if it cannot be run.
@@ -44,6 +46,11 @@ struct ExpectedIdentity {
   std::string weathergs_commit;
   DatasetIdentity identity;
 };
+
+// The tool versions every expected identity in `expected_dir` (scenes/expected/) was made with, each
+// once, in file order: "Blender 3.4.1, COLMAP 3.8". Empty when the folder has none.
+std::vector<ToolVersions> expected_tool_versions(const std::string& expected_dir);
+std::string describe(const ToolVersions& t);  // "Blender 3.4.1, COLMAP 3.8"
 
 // "<folder of the scene file>/expected/<profile>.json".
 std::string expected_identities_path(const std::string& scene_file, const std::string& profile);

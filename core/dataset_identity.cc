@@ -71,6 +71,12 @@ DatasetIdentity compute_dataset_identity(const std::string& root) {
     }
   }
   id.files[kSplitsPseudoFile] = sha256_hex(canonical_splits(info));
+  return identity_of_files(std::move(id.files));
+}
+
+DatasetIdentity identity_of_files(std::map<std::string, std::string> files) {
+  DatasetIdentity id;
+  id.files = std::move(files);
   Sha256 h;
   for (const auto& [path, sha] : id.files) h.update(path + " " + sha + "\n");  // std::map: byte order of paths
   id.sha256 = h.hex_digest();

@@ -29,6 +29,9 @@ struct DatasetIdentity {
   static DatasetIdentity from_json(const JsonReader& r);
 };
 
+// The identity of these files (path -> SHA-256): the one rule that turns per-file hashes into one.
+DatasetIdentity identity_of_files(std::map<std::string, std::string> files);
+
 // Hashes the dataset's files now (InputError if root is not a dataset folder).
 DatasetIdentity compute_dataset_identity(const std::string& root);
 

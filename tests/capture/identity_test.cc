@@ -200,6 +200,12 @@ TEST(GenerateIdentityTest, TinyVariantIsTheSameDatasetWithOneAndTwoThreadsAndMat
   const DatasetIdentity ia = compute_dataset_identity(tmp / "pool_rain_1"), ib = compute_dataset_identity(tmp / "pool_rain_2");
   EXPECT_EQ(first_difference(ia, ib), std::nullopt);
   EXPECT_GT(ia.files.size(), 30u);
+  // The restoration targets add targets/ and change nothing else: such a dataset is compared on the
+  // files both have, and matches (the workflow generates with --targets).
+  const auto r = testing::run_command(generate_command(scene, 2, tmp / "cache1", tmp / "with_targets", "--targets"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("(matches)"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::is_directory(tmp / "with_targets/targets"));
 }
 
 // A dataset that is not the benchmark's is refused, naming the variant, the tools and the first
