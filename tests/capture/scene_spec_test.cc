@@ -231,7 +231,6 @@ TEST(SceneSpecTest, MissingBlenderLeavesNothing) {
 
 TEST(SceneSpecTest, ThreadCapReachesBlenderAndLlvmpipe) {
   TempDir tmp;
-  SceneSpec s = read_scene_spec(scene_path("pool.json"));
   BlenderOptions options;
   options.script = testing::blender_script();
   // A "Blender" that prints how it was called and fails, so the error carries its log.
@@ -242,17 +241,32 @@ TEST(SceneSpecTest, ThreadCapReachesBlenderAndLlvmpipe) {
   }
   fs::permissions(fake, fs::perms::owner_all);
   options.executable = fake;
+  // Cycles (the benchmark scenes): one-thread processes side by side, whatever the cap, each with a
+  // job of its own views.
+  SceneSpec cycles = read_scene_spec(scene_path("pool.json"));
+  ASSERT_EQ(cycles.profile("tiny").engine, "cycles");
+  for (int threads : {1, 2, 0}) {
+    options.threads = threads;
+    expect_input_error([&] { render_clean_dataset(cycles, "rain", "tiny", tmp / "out", options); },
+                       "args: -b --factory-startup -t 1 --python-exit-code 1 --python");
+  }
+  options.threads = 2;
+  expect_input_error([&] { render_clean_dataset(cycles, "rain", "tiny", tmp / "out", options); }, "blender_job_0.json");
   options.threads = 1;
-  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); },
-                     "args: -b --factory-startup -t 1 --python-exit-code 1 --python");
-  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); }, "LP_NUM_THREADS=1");
+  expect_input_error([&] { render_clean_dataset(cycles, "rain", "tiny", tmp / "out", options); }, "blender_job.json");
+  // EEVEE: one process with the cap, and llvmpipe's.
+  SceneSpec eevee = read_scene_spec(write_modified(tmp, "pool.json", [](Json& j) { j["profiles"]["tiny"]["engine"] = "eevee"; }));
+  options.threads = 2;
+  expect_input_error([&] { render_clean_dataset(eevee, "rain", "tiny", tmp / "out", options); },
+                     "args: -b --factory-startup -t 2 --python-exit-code 1 --python");
+  expect_input_error([&] { render_clean_dataset(eevee, "rain", "tiny", tmp / "out", options); }, "LP_NUM_THREADS=2");
   options.threads = 0;  // all cores: Blender's and llvmpipe's defaults
-  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); },
+  expect_input_error([&] { render_clean_dataset(eevee, "rain", "tiny", tmp / "out", options); },
                      "args: -b --factory-startup --python-exit-code 1 --python");
   if (!std::getenv("LP_NUM_THREADS"))
-    expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); }, "LP_NUM_THREADS=unset");
+    expect_input_error([&] { render_clean_dataset(eevee, "rain", "tiny", tmp / "out", options); }, "LP_NUM_THREADS=unset");
   options.threads = -1;
-  expect_input_error([&] { render_clean_dataset(s, "rain", "tiny", tmp / "out", options); }, "threads is -1");
+  expect_input_error([&] { render_clean_dataset(cycles, "rain", "tiny", tmp / "out", options); }, "threads is -1");
   EXPECT_FALSE(fs::exists(tmp / "out"));
 }
 
