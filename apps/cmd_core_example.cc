@@ -8,6 +8,7 @@
 #include "apps/command.h"
 #include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
 #include "core/rng.h"
 
 namespace weathergs::cli {
@@ -106,6 +107,9 @@ int run_example(const ExampleArgs& a) {
       ds.info.splits = llff_splits(names);
       ds.info.splits_rule = kLlffSplitRule;
       write_dataset(ds);
+      // Recorded as `generate` records it, so that a changed file is refused when scored.
+      ds.info.identity = compute_dataset_identity(ds.root).to_json(true);
+      write_dataset_json(ds.file(layout::kDatasetJson), ds.info);
       for (size_t m = 0; m < methods.size(); ++m) {
         const fs::path dir = fs::path(out.path()) / "renders" / methods[m] / name;
         fs::create_directories(dir);

@@ -11,7 +11,7 @@ namespace {
 struct CheckArgs {
   std::vector<std::string> baseline, results;
   evaluator::CheckTolerances tol;
-  bool allow_other_weights = false, allow_other_recipe = false;
+  bool allow_other_data = false, allow_other_weights = false, allow_other_recipe = false;
   std::string json_output, tolerances_file;
   CLI::App* sub = nullptr;
 };
@@ -31,6 +31,7 @@ int run_check(CheckArgs args) {
   for (const auto& p : args.results) cur.push_back({p, evaluator::read_results(p)});
   evaluator::CheckOptions o;
   o.tolerances = args.tol;
+  o.allow_other_data = args.allow_other_data;
   o.allow_other_weights = args.allow_other_weights;
   o.allow_other_recipe = args.allow_other_recipe;
   evaluator::CheckReport report = evaluator::check_regression(base, cur, o);
@@ -44,7 +45,7 @@ Command make_check(CLI::App& root) {
   CLI::App* sub = root.add_subcommand(
       "check", "Regression check: exit 1 if any metric got worse than the baseline by more than its tolerance (the means, "
       "and every view with the per-view tolerances); exit 2 if the two are not comparable (protocol, ground truth, "
-      "weights, recipe)");
+      "dataset identity, weights, recipe)");
   sub->add_option("--baseline", args->baseline, "Baseline results JSON (repeatable)")->required();
   sub->add_option("--results", args->results, "New results JSON (repeatable)")->required();
   sub->add_option("--psnr-tol", args->tol.psnr, "Allowed PSNR drop in dB")->capture_default_str();
@@ -53,6 +54,9 @@ Command make_check(CLI::App& root) {
   sub->add_option("--tolerances", args->tolerances_file,
                   "Tolerances file of the baseline ({\"psnr\", \"ssim\", \"lpips\", \"basis\"}, e.g. "
                   "benchmarks/baselines/regression/tolerances.json); --*-tol flags override it");
+  sub->add_flag("--allow-other-data", args->allow_other_data,
+                "Compare although the new results were scored on other data than the baseline (dataset_identity); "
+                "refused (exit 2) otherwise");
   sub->add_flag("--allow-other-weights", args->allow_other_weights,
                 "Compare although the new results were made with other weights than the baseline records "
                 "(method_info.weights); refused (exit 2) otherwise");

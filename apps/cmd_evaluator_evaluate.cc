@@ -11,6 +11,7 @@ namespace {
 struct EvaluateArgs {
   std::string gt, renders, method, split = "test", mask_dir, output, ground_truth = "clean";
   ScoringFlags scoring;
+  bool allow_changed_dataset = false;
 };
 
 int run_evaluate(const EvaluateArgs& args) {
@@ -24,8 +25,12 @@ int run_evaluate(const EvaluateArgs& args) {
   if (args.ground_truth == "lens_only") o.ground_truth = ImageKind::kTargetLensOnly;
   if (!args.mask_dir.empty()) o.mask_dir = args.mask_dir;
   o.scoring = args.scoring.options();
+  o.allow_changed_dataset = args.allow_changed_dataset;
   evaluator::Results r = evaluator::evaluate(o);
   evaluator::write_results(args.output, r);
+  if (r.dataset_identity && r.dataset_identity->recorded_sha256)
+    std::fprintf(stderr, "warning: scored %s although its files no longer match the identity its dataset.json records "
+                 "(%s); results.json says so\n", args.gt.c_str(), r.dataset_identity->first_difference->c_str());
   std::printf("%s on %s (%zu %s views): PSNR %s  SSIM %s  LPIPS %s\nwrote %s\n", r.method.c_str(), r.dataset.c_str(),
               r.per_view.size(), r.protocol.split.c_str(), evaluator::format_metric(r.metrics.psnr, 2).c_str(),
               evaluator::format_metric(r.metrics.ssim, 4).c_str(),
@@ -47,6 +52,9 @@ Command make_evaluate(CLI::App& root) {
       ->capture_default_str()->check(CLI::IsMember({"clean", "images", "no_particles", "lens_only"}));
   sub->add_option("--mask-dir", args->mask_dir, "Masks <view>.png (255 = exclude): metrics over valid pixels only");
   sub->add_option("-o,--output", args->output, "Results JSON to write (atomically)")->required();
+  sub->add_flag("--allow-changed-dataset", args->allow_changed_dataset,
+                "Score although the dataset's files no longer match the identity its dataset.json records "
+                "(refused, exit 2, otherwise); results.json records the difference");
   args->scoring.add_to(sub);
   return {sub, [args] { return run_evaluate(*args); }};
 }

@@ -15,6 +15,7 @@ struct LeaderboardArgs {
   std::vector<std::string> results;
   std::string format = "md", output, against_paper;
   bool paper = false;
+  bool allow_mixed_data = false;
 };
 
 int run_leaderboard(const LeaderboardArgs& args) {
@@ -27,13 +28,15 @@ int run_leaderboard(const LeaderboardArgs& args) {
   }
   std::vector<evaluator::LoadedResults> loaded;
   for (const auto& p : args.results) loaded.push_back({p, evaluator::read_results(p)});
+  evaluator::LeaderboardOptions options;
+  options.allow_mixed_data = args.allow_mixed_data;
   std::string text;
   if (args.paper || published) {
-    const evaluator::PaperTables tables = evaluator::build_paper_tables(loaded);
+    const evaluator::PaperTables tables = evaluator::build_paper_tables(loaded, options);
     text = evaluator::render_paper_tables(tables, format);
     if (published) text += evaluator::render_agreement(tables, *published);
   } else {
-    text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded), format);
+    text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded, options), format);
   }
   if (args.output.empty() || args.output == "-") {
     std::fputs(text.c_str(), stdout);
@@ -59,6 +62,9 @@ Command make_leaderboard(CLI::App& root) {
                   "(benchmarks/paper_tables.json): rankings with Kendall's tau, each reading reproduced or not "
                   "(implies --paper; Markdown only)")
       ->check(CLI::ExistingFile);
+  sub->add_flag("--allow-mixed-data", args->allow_mixed_data,
+                "Tabulate results of one variant scored on datasets of different identities (refused, exit 2, "
+                "otherwise), marking their cells with a dagger and a note naming the identities");
   return {sub, [args] { return run_leaderboard(*args); }};
 }
 

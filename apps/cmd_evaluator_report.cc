@@ -16,7 +16,8 @@ struct ReportArgs {
 };
 
 int run(ReportArgs& a) {
-  a.options.command = "weathergs report " + a.options.suite_dir + " -o " + a.options.out_dir;
+  a.options.command = "weathergs report " + a.options.suite_dir + " -o " + a.options.out_dir +
+                      (a.options.allow_mixed_data ? " --allow-mixed-data" : "");
   // The LPIPS weights the scores were made with are this installation's (results record the
   // protocol's name, not the file).
   try {
@@ -41,6 +42,9 @@ Command make(CLI::App& root) {
   sub->add_option("suite", a->options.suite_dir, "Suite folder (the workflow's output: runs/, data/)")->required();
   sub->add_option("-o,--out", a->options.out_dir, "Report folder (replaced as a whole)")->required();
   sub->add_option("--thumb-width", a->options.thumb_width, "Thumbnail width in pixels")->capture_default_str()->check(CLI::Range(16, 4096));
+  sub->add_flag("--allow-mixed-data", a->options.allow_mixed_data,
+                "Show runs of one variant scored on datasets of different identities, or on another dataset than "
+                "data/<variant> (refused, exit 2, otherwise), marked with a dagger");
   a->sub = sub;
   return {sub, [a] { return run(*a); }};
 }

@@ -145,6 +145,17 @@ CheckReport check_regression(const std::vector<LoadedResults>& baseline, const s
                                " differs from the baseline's " + br.sha256_ground_truth + " (" + b->path +
                                "): the ground truth itself changed, so the scores are not comparable; regenerate the "
                                "baseline (benchmarks/baselines/README.md) if the change is intended");
+    if (br.dataset_identity && dataset_identity_differs(br, nr)) {
+      const std::string why = "dataset_identity.sha256 is " + dataset_identity_text(nr) + ", the baseline's " +
+                              dataset_identity_text(br);
+      if (!options.allow_other_data)
+        throw InputError(np, "scored on other data than the baseline " + b->path + ": " + why +
+                                 "; pass --allow-other-data to compare anyway, or regenerate the baseline");
+      o << "  note: other data than the baseline (allowed): " << why << "\n";
+      dj["other_data"] = true;
+    } else if (!br.dataset_identity && nr.dataset_identity) {
+      o << "  note: the baseline records no dataset identity, so the data are not compared\n";
+    }
     if (std::string why = provenance_mismatch(br.method_info, nr.method_info, {"weights"}); !why.empty()) {
       if (!options.allow_other_weights)
         throw InputError(np, "made with other weights than the baseline " + b->path + ": " + why +

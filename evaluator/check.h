@@ -6,8 +6,9 @@
 // Only like is compared with like, else the check refuses (InputError, exit 2) before any verdict:
 // the protocol and the ground truth's sha256 must be equal (a changed yardstick is an error, not a
 // pass), and so must what the baseline records of how it was made, unless allowed explicitly: the
+// dataset's identity (dataset_identity.sha256: the data the method read as well as the truth), the
 // weights' sha256 (method_info.weights) and the recipe (method_info.method, method_description,
-// iterations, schedule).
+// iterations, schedule). A key the baseline does not record is not compared.
 #pragma once
 
 #include <optional>
@@ -37,6 +38,7 @@ struct CheckTolerances {
 
 struct CheckOptions {
   CheckTolerances tolerances;
+  bool allow_other_data = false;     // compare although the dataset identities differ
   bool allow_other_weights = false;  // compare although method_info.weights differ
   bool allow_other_recipe = false;   // compare although the recipe differs
 };

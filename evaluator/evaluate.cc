@@ -72,6 +72,30 @@ void check_scoring_resources(const ScoringOptions& options) {
   (void)probe;
 }
 
+ScoredDataset identify_dataset(const Dataset& ds, bool allow_changed) {
+  ScoredDataset out;
+  const DatasetIdentity found = compute_dataset_identity(ds.root);
+  if (ds.info.identity) {
+    const std::string where = ds.file(layout::kDatasetJson);
+    const DatasetIdentity recorded = DatasetIdentity::from_json(JsonReader(*ds.info.identity, where, "/identity"));
+    if (found.sha256 != recorded.sha256) {
+      // A record without its file list can say that something changed, not what.
+      const std::string diff = recorded.files.empty() ? "dataset.json records no file list to say which file"
+                                                      : first_difference(found, recorded).value_or("");
+      if (!allow_changed)
+        throw InputError(ds.root, "the dataset's files no longer match the identity its dataset.json records (" +
+                                      found.sha256 + ", recorded " + recorded.sha256 + "): " + diff +
+                                      "; regenerate the dataset, or score it anyway with weathergs evaluate "
+                                      "--allow-changed-dataset (recorded in results.json)");
+      out.recorded_sha256 = recorded.sha256;
+      out.first_difference = diff;
+    }
+  }
+  out.sha256 = found.sha256;
+  out.file_count = found.files.size();
+  return out;
+}
+
 Results evaluate(const EvaluateOptions& o) {
   o.validate();
   const Dataset ds = read_dataset(o.gt_dataset);
@@ -99,6 +123,7 @@ Results evaluate(const EvaluateOptions& o) {
     throw InputError(o.renders_dir, "render(s) for view(s) not in the " + o.split + " split: " + extra);
 
   Results r;
+  r.dataset_identity = identify_dataset(ds, o.allow_changed_dataset);
   r.method = o.method;
   const std::string info_path = (fs::path(o.renders_dir) / "info.json").string();
   if (fs::exists(info_path)) {

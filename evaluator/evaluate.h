@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "core/dataset.h"
 #include "core/dataset_layout.h"
 #include "core/image.h"
 #include "evaluator/lpips.h"
@@ -38,13 +39,22 @@ struct EvaluateOptions {
   ImageKind ground_truth = ImageKind::kClean;  // which of the dataset's image folders is the truth
   std::optional<std::string> mask_dir;  // masks (255 = exclude) named <view>.png
   ScoringOptions scoring;
+  // Score although the dataset's files no longer match the identity its dataset.json records; the
+  // difference is then written into results.json (dataset_identity.differs_from_recorded).
+  bool allow_changed_dataset = false;
 
   // InputError naming the field and the rule (gt_dataset, renders_dir, split required; ground truth
   // must be an image kind: clean or images).
   void validate() const;
 };
 
-// Scores every view of the split in parallel. Missing or extra renders, unreadable images, size
+// The identity of the dataset's files as results.json records it (docs/formats.md, "Dataset
+// identity"). When dataset.json records an identity that the files no longer match: InputError naming
+// the dataset, both hashes and the first differing file, unless allow_changed, which keeps the
+// difference in the returned record instead.
+ScoredDataset identify_dataset(const Dataset& dataset, bool allow_changed);
+
+// Scores every view of the split in parallel, after checking the dataset's identity (identify_dataset). Missing or extra renders, unreadable images, size
 // mismatches and missing masks are InputErrors naming the view.
 Results evaluate(const EvaluateOptions& options);
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "evaluator/statistics.h"
@@ -96,8 +97,88 @@ bool is_reference_method(const std::string& method) {
   return method == "oracle" || method == "gt-masks" || method == "nerf-oracle";
 }
 
-std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results) {
+namespace {
+
+std::string scene_key(const Results& r) { return r.scene.empty() ? r.dataset : r.scene; }
+std::string identity_key(const Results& r) { return r.dataset_identity ? r.dataset_identity->sha256 : ""; }
+
+std::string variant_label(const std::pair<std::string, std::string>& weather_scene) {
+  return weather_scene.first.empty() ? weather_scene.second : weather_scene.second + " " + weather_scene.first;
+}
+
+// "2 on 1a2b3c4d5e6f (the column's); 1 on 9f8e7d6c5b4a (noise)": how many results of a variant on
+// each identity, and which methods the odd ones are.
+std::string identities_line(const std::vector<const LoadedResults*>& group, const std::vector<std::string>& ids,
+                            const std::string& ref) {
+  std::string line;
+  for (const std::string& id : ids) {
+    int n = 0;
+    std::vector<std::string> methods;
+    for (const LoadedResults* lr : group) {
+      if (identity_key(lr->results) != id) continue;
+      ++n;
+      if (std::find(methods.begin(), methods.end(), lr->results.method) == methods.end())
+        methods.push_back(lr->results.method);
+    }
+    std::string who;
+    for (const std::string& m : methods) who += (who.empty() ? "" : ", ") + m;
+    line += (line.empty() ? "" : "; ") + std::to_string(n) + (id.empty() ? " with none recorded" : " on " + id.substr(0, 12)) +
+            (id == ref ? " (the column's)" : " (" + who + ")");
+  }
+  return line;
+}
+
+}  // namespace
+
+MixedData find_mixed_data(const std::vector<LoadedResults>& results, const LeaderboardOptions& options) {
+  std::vector<std::pair<std::string, std::string>> order;  // variants as (weather, scene), first appearance
+  std::map<std::pair<std::string, std::string>, std::vector<const LoadedResults*>> by_variant;
+  for (const auto& lr : results) {
+    const auto key = std::make_pair(lr.results.weather, scene_key(lr.results));
+    if (!by_variant.count(key)) order.push_back(key);
+    by_variant[key].push_back(&lr);
+  }
+  MixedData out;
+  for (const auto& key : order) {
+    const auto& group = by_variant[key];
+    std::vector<std::string> ids;  // "" = none recorded; first appearance
+    std::map<std::string, int> count;
+    for (const LoadedResults* lr : group)
+      if (count[identity_key(lr->results)]++ == 0) ids.push_back(identity_key(lr->results));
+    if (ids.size() < 2) continue;  // one dataset, or none recorded by any
+    std::string ref;
+    for (const std::string& id : ids)
+      if (!id.empty() && (ref.empty() || count[id] > count[ref])) ref = id;
+    const LoadedResults* on_ref = nullptr;
+    for (const LoadedResults* lr : group)
+      if (!on_ref && identity_key(lr->results) == ref) on_ref = lr;
+    for (const LoadedResults* lr : group) {
+      if (identity_key(lr->results) == ref) continue;
+      if (!options.allow_mixed_data)
+        throw InputError(lr->path, "scored on other data than " + on_ref->path + " (both " + variant_label(key) +
+                                       "): dataset identity " + dataset_identity_text(lr->results) + " vs " + ref +
+                                       "; results on different datasets cannot share a column: score them on one "
+                                       "dataset, or pass --allow-mixed-data to mark them");
+      out.odd.insert(lr);
+    }
+    out.mixed.push_back({key.first, key.second, identities_line(group, ids, ref)});
+  }
+  return out;
+}
+
+std::string other_data_note(const std::vector<std::string>& lines) {
+  if (lines.empty()) return "";
+  std::string o = std::string(kOtherDataMarker) +
+                  " Includes results scored on other data than the rest of their variant (scene and weather); the "
+                  "mixed variants' dataset identities, by their first 12 hex digits: ";
+  for (size_t i = 0; i < lines.size(); ++i) o += (i ? "; " : "") + lines[i];
+  return o + ".";
+}
+
+std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results,
+                                                const LeaderboardOptions& options) {
   if (results.empty()) throw InputError("leaderboard", "no results files given");
+  const MixedData mixed = find_mixed_data(results, options);
   std::vector<std::string> weathers;
   std::map<std::string, std::vector<const LoadedResults*>> by_weather;
   for (const auto& lr : results) {
@@ -111,6 +192,9 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
     const auto& group = by_weather[w];
     t.protocol = group.front()->results.protocol;
     std::map<std::pair<size_t, size_t>, std::vector<const Results*>> cell_results;
+    std::set<std::pair<size_t, size_t>> odd_cells;
+    for (const MixedData::Variant& v : mixed.mixed)
+      if (v.weather == w) t.data_notes.push_back(v.scene + ": " + v.identities);
     for (const LoadedResults* lr : group) {
       if (!(lr->results.protocol == t.protocol))
         throw InputError(lr->path, "protocol differs from " + group.front()->path + " (" +
@@ -119,9 +203,11 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
       size_t m = index_of(t.methods, lr->results.method);
       size_t s = index_of(t.scenes, lr->results.scene.empty() ? lr->results.dataset : lr->results.scene);
       cell_results[{m, s}].push_back(&lr->results);
+      if (mixed.is_odd(*lr)) odd_cells.insert({m, s});
     }
     t.cells.assign(t.methods.size(), std::vector<CellStats>(t.scenes.size()));
     for (auto& [key, rs] : cell_results) t.cells[key.first][key.second] = stats(rs);
+    for (const auto& [m, s] : odd_cells) t.cells[m][s].other_data = true;
     t.average.resize(t.methods.size());
     for (size_t m = 0; m < t.methods.size(); ++m) {
       CellStats avg;
@@ -131,6 +217,7 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
         if (c.n == 0) { complete = false; break; }
         avg.psnr += c.psnr; avg.ssim += c.ssim; avg.lpips += c.lpips;
         lp = lp && c.has_lpips;
+        avg.other_data = avg.other_data || c.other_data;
       }
       if (complete) {
         const double k = double(t.scenes.size());
@@ -196,7 +283,7 @@ std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
     bool any = false;
     for (size_t m = 0; m < t.methods.size(); ++m) {
       const CellStats& c = cell(t, m, col);
-      if (!present(c, k) || is_reference(t, m)) continue;
+      if (!present(c, k) || is_reference(t, m) || c.other_data) continue;
       double v = value(c, k);
       if (!any || (kHigherBetter[k] ? v > best_v : v < best_v)) best_v = v;
       any = true;
@@ -205,7 +292,8 @@ std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
     best_text = format_metric(best_v, kDecimals[k]);
     for (size_t m = 0; m < t.methods.size(); ++m) {
       const CellStats& c = cell(t, m, col);
-      best[m][col] = present(c, k) && !is_reference(t, m) && format_metric(value(c, k), kDecimals[k]) == best_text;
+      best[m][col] = present(c, k) && !is_reference(t, m) && !c.other_data &&
+                     format_metric(value(c, k), kDecimals[k]) == best_text;
     }
   }
   return best;
@@ -238,12 +326,17 @@ bool any_repeats(const LeaderboardTable& t) {
 
 std::string protocol_note(const LeaderboardTable& t) {
   const bool refs = std::find(t.reference.begin(), t.reference.end(), true) != t.reference.end();
+  const std::string data = other_data_note(t.data_notes);
   return "Protocol: " + t.protocol.to_string() + ". Best per column in bold" +
-         (refs ? " (reference lines excluded)." : ".") +
+         (refs && !data.empty() ? " (reference lines and marked cells excluded)."
+          : refs               ? " (reference lines excluded)."
+          : !data.empty()      ? " (marked cells excluded)."
+                               : ".") +
          (!any_repeats(t) ? ""
           : t.ci95 ? " Cells with repeated runs (seeds) show mean ± the half-width of its 95% Student-t interval; "
                      "an average's interval is over the seeds that ran on every scene, of each seed's mean over scenes."
-                   : " Cells with repeated runs show mean ± standard deviation.") + " " + t.average_note;
+                   : " Cells with repeated runs show mean ± standard deviation.") + " " + t.average_note +
+         (data.empty() ? "" : " " + data);
 }
 
 void markdown(std::ostringstream& o, const LeaderboardTable& t) {
@@ -260,6 +353,7 @@ void markdown(std::ostringstream& o, const LeaderboardTable& t) {
       std::string s = cell_text(t, cell(t, m, col), cols[col].metric, " ± ");
       if (s.empty()) s = "–";
       else if (best[m][col]) s = "**" + s + "**";
+      else if (cell(t, m, col).other_data) s += std::string(" ") + kOtherDataMarker;
       o << " " << s << " |";
     }
     o << "\n";
@@ -277,6 +371,7 @@ void csv(std::ostringstream& o, const LeaderboardTable& t, bool header) {
       o << "," << csv_escape(c.group + "_" + m);
       if (any_repeats(t)) o << "," << csv_escape(c.group + "_" + m + (t.ci95 ? "_ci95" : "_std"));
     }
+    if (!t.data_notes.empty()) o << ",other_data";
     o << "\n";
   }
   for (size_t m = 0; m < t.methods.size(); ++m) {
@@ -286,6 +381,12 @@ void csv(std::ostringstream& o, const LeaderboardTable& t, bool header) {
       const int k = cols[col].metric;
       o << "," << (present(c, k) ? format_metric(value(c, k), 6) : "");
       if (any_repeats(t)) o << "," << (present(c, k) && c.n > 1 ? format_metric(spread(t, c, k), 6) : "");
+    }
+    if (!t.data_notes.empty()) {  // the scenes whose cell holds results on other data, ';'-separated
+      std::string scenes;
+      for (size_t s = 0; s < t.scenes.size(); ++s)
+        if (t.cells[m][s].other_data) scenes += (scenes.empty() ? "" : ";") + t.scenes[s];
+      o << "," << csv_escape(scenes);
     }
     o << "\n";
   }
@@ -313,11 +414,18 @@ void latex(std::ostringstream& o, const LeaderboardTable& t) {
       if (s == "+inf") s = "$+\\infty$";
       if (s.empty()) s = "--";
       else if (best[m][col]) s = "\\textbf{" + s + "}";
+      else if (cell(t, m, col).other_data) s += "$^\\dagger$";
       o << " & " << s;
     }
     o << " \\\\\n";
   }
-  o << "\\bottomrule\n\\end{tabular}}\n\\end{table}\n\n";
+  o << "\\bottomrule\n\\end{tabular}}\n";
+  if (!t.data_notes.empty()) {
+    std::string note = other_data_note(t.data_notes);
+    note.replace(0, std::string(kOtherDataMarker).size(), "");
+    o << "{\\footnotesize $^\\dagger$" << latex_escape(note) << "}\n";
+  }
+  o << "\\end{table}\n\n";
 }
 
 void html(std::ostringstream& o, const LeaderboardTable& t) {
@@ -335,6 +443,7 @@ void html(std::ostringstream& o, const LeaderboardTable& t) {
     for (size_t col = 0; col < cols.size(); ++col) {
       std::string s = cell_text(t, cell(t, m, col), cols[col].metric, " &plusmn; ");
       if (s.empty()) s = "&ndash;";
+      else if (!best[m][col] && cell(t, m, col).other_data) s += " &dagger;";
       o << (cols[col].metric == 0 ? "<td class=\"first\">" : "<td>") << (best[m][col] ? "<b>" + s + "</b>" : s) << "</td>";
     }
     o << "</tr>\n";

@@ -2,9 +2,15 @@
 // column groups = scenes (PSNR up, SSIM up, LPIPS down) plus an Average group, best value per column
 // in bold. Repeated results of one (method, scene, weather), e.g. several seeds, are averaged and
 // shown with their standard deviation and count.
+//
+// One column holds results of one dataset: results of one variant (scene and weather) whose dataset
+// identities differ (results.json's dataset_identity; one that records none differs from one that
+// does) are refused, naming both files and both hashes, unless allowed; then the cells holding them
+// are marked with a dagger and a note names the identities.
 #pragma once
 
 #include <limits>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -28,6 +34,9 @@ struct CellStats {
   // Half-widths of the 95% Student-t intervals of the means (evaluator/statistics.h); NaN when n < 2.
   double psnr_ci = kNoInterval, ssim_ci = kNoInterval, lpips_ci = kNoInterval;
   bool has_lpips = false;
+  // Holds a result scored on other data than its column's (LeaderboardOptions::allow_mixed_data):
+  // marked, never in bold.
+  bool other_data = false;
   static constexpr double kNoInterval = std::numeric_limits<double>::quiet_NaN();
 };
 
@@ -47,14 +56,42 @@ struct LeaderboardTable {
   // standard deviation.
   bool ci95 = false;
   Protocol protocol;
+  // One line per column whose results were scored on more than one dataset (allow_mixed_data).
+  std::vector<std::string> data_notes;
 };
+
+struct LeaderboardOptions {
+  // Results of one variant on datasets of different identities: marked instead of refused.
+  bool allow_mixed_data = false;
+};
+
+// Which results were scored on other data than their variant's (scene and weather): per variant, the
+// identity most of its results record (the first such on a tie) is the variant's; every result with
+// another identity or none is odd, unless no result of the variant records one. Without
+// allow_mixed_data the first odd result is an InputError naming it and a result of the variant's
+// identity, with both hashes.
+struct MixedData {
+  struct Variant {
+    std::string weather, scene;
+    std::string identities;  // "2 on 1a2b3c4d5e6f (the column's); 1 on 9f8e7d6c5b4a (noise)"
+  };
+  std::set<const LoadedResults*> odd;
+  std::vector<Variant> mixed;  // the variants with odd results, in order of first appearance
+  bool is_odd(const LoadedResults& r) const { return odd.count(&r) > 0; }
+};
+MixedData find_mixed_data(const std::vector<LoadedResults>& results, const LeaderboardOptions& options);
+// The marker of a cell holding odd results, and the note that explains it under a table.
+inline constexpr const char* kOtherDataMarker = "†";
+std::string other_data_note(const std::vector<std::string>& lines);  // "" for none
 
 // oracle (3DGS on the clean images), nerf-oracle and gt-masks (ground-truth masks): bounds, not
 // competitors. Every table marks them as reference lines: shown, never in bold.
 bool is_reference_method(const std::string& method);
 
-// Groups results into tables. Results in one table must share a protocol (InputError naming files).
-std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results);
+// Groups results into tables. Results in one table must share a protocol, and results in one column
+// a dataset unless options allow mixing (InputError naming files).
+std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results,
+                                                const LeaderboardOptions& options = {});
 std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format);
 
 // Mean and population standard deviation of x (NaN for none); an infinite value (PSNR of identical

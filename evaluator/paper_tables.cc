@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <set>
 #include <sstream>
 
 namespace weathergs::evaluator {
@@ -115,7 +116,7 @@ const std::pair<const char*, const char*> kComparisons[] = {
     {"gs-w-lite", "3dgs"},           {"derainnerf", "nerf"}};
 
 std::vector<PairedDifference> paired_differences(const std::vector<LoadedResults>& results,
-                                                 const std::vector<std::string>& weathers) {
+                                                 const std::vector<std::string>& weathers, const MixedData& mixed) {
   std::vector<PairedDifference> out;
   for (const auto& [method, baseline] : kComparisons) {
     std::vector<std::string> groups = weathers;
@@ -123,25 +124,29 @@ std::vector<PairedDifference> paired_differences(const std::vector<LoadedResults
     for (const std::string& w : groups) {
       // (variant, seed) -> that method's metrics (repeats averaged), for the method and the baseline.
       std::map<std::pair<std::string, std::string>, std::array<std::vector<double>, 3>> a, b;
+      std::set<std::pair<std::string, std::string>> odd;  // (variant, seed) pairs with a result on other data
       for (const auto& lr : results) {
         if (w != "all" && lr.results.weather != w) continue;
         auto* side = lr.results.method == method ? &a : lr.results.method == baseline ? &b : nullptr;
         if (!side) continue;
+        if (mixed.is_odd(lr)) odd.insert({variant_of(lr.results), seed_key(lr)});
         auto& v = (*side)[{variant_of(lr.results), seed_key(lr)}];
         const auto m = metrics_of(lr.results);
         for (int k = 0; k < 3; ++k) v[k].push_back(m[k]);
       }
       std::array<std::vector<double>, 3> d;
+      bool other_data = false;
       for (const auto& [key, va] : a) {
         const auto it = b.find(key);
         if (it == b.end()) continue;
+        other_data = other_data || odd.count(key) > 0;
         for (int k = 0; k < 3; ++k) {
           const double x = mean_of(va[k]) - mean_of(it->second[k]);
           if (std::isfinite(x)) d[k].push_back(x);
         }
       }
       if (d[0].empty()) continue;
-      out.push_back({method, baseline, w, mean_ci95(d[0]), mean_ci95(d[1]), mean_ci95(d[2])});
+      out.push_back({method, baseline, w, mean_ci95(d[0]), mean_ci95(d[1]), mean_ci95(d[2]), other_data});
     }
   }
   return out;
@@ -149,9 +154,12 @@ std::vector<PairedDifference> paired_differences(const std::vector<LoadedResults
 
 }  // namespace
 
-PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
+PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const LeaderboardOptions& options) {
   PaperTables out;
-  out.quality = build_leaderboard(results);
+  out.quality = build_leaderboard(results, options);  // refuses mixed data unless allowed
+  const MixedData mixed = find_mixed_data(results, options);
+  for (const MixedData::Variant& v : mixed.mixed)
+    out.data_notes.push_back(v.scene + (v.weather.empty() ? "" : " " + v.weather) + ": " + v.identities);
   std::stable_sort(out.quality.begin(), out.quality.end(), [](const LeaderboardTable& a, const LeaderboardTable& b) {
     return weather_rank(a.weather) < weather_rank(b.weather);
   });
@@ -187,6 +195,7 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
                    " variants of each variant's mean over seeds, only for methods with every variant.";
   a.protocol = out.quality.empty() ? Protocol{} : out.quality.front().protocol;
   a.ci95 = true;
+  a.data_notes = out.data_notes;
   for (const char* m : kAblationMethods) {
     std::map<std::string, std::vector<const Results*>> per_variant;
     for (const auto& lr : results) {
@@ -199,6 +208,7 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
     }
     if (per_variant.empty()) continue;
     CellStats avg;
+    for (const auto& lr : results) avg.other_data = avg.other_data || (lr.results.method == m && mixed.is_odd(lr));
     bool complete = per_variant.size() == variants.size(), lp = true;
     if (complete) {
       for (const auto& [v, rs] : per_variant) {
@@ -261,7 +271,7 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results) {
   }
   std::vector<std::string> weathers;
   for (const auto& t : out.quality) weathers.push_back(t.weather);
-  out.differences = paired_differences(results, weathers);
+  out.differences = paired_differences(results, weathers, mixed);
   return out;
 }
 
@@ -373,11 +383,16 @@ const char* kDifferenceNote =
     "half-width of its 95% Student-t interval (none with one pair). PSNR and SSIM: positive = the method "
     "is better; LPIPS: negative = the method is better.";
 
-std::string render_differences(const std::vector<PairedDifference>& rows, const std::string& title, TableFormat format) {
+std::string render_differences(const std::vector<PairedDifference>& rows, const std::string& title, TableFormat format,
+                               const std::vector<std::string>& data_notes) {
   const char* header[] = {"Difference", "Weather", "Pairs", "ΔPSNR (dB)", "ΔSSIM", "ΔLPIPS"};
+  bool marked = false;
+  for (const auto& r : rows) marked = marked || r.other_data;
+  const std::string note = std::string(kDifferenceNote) + (marked ? " " + other_data_note(data_notes) : "");
   std::ostringstream o;
   auto cells = [&](const PairedDifference& r, const char* pm) {
-    return std::vector<std::string>{r.method + " − " + r.baseline, r.weather, std::to_string(r.psnr.n),
+    const std::string mark = r.other_data ? std::string(" ") + kOtherDataMarker : "";
+    return std::vector<std::string>{r.method + " − " + r.baseline + mark, r.weather, std::to_string(r.psnr.n),
                                     signed_interval(r.psnr, 2, pm), signed_interval(r.ssim, 3, pm),
                                     signed_interval(r.lpips, 3, pm)};
   };
@@ -391,7 +406,7 @@ std::string render_differences(const std::vector<PairedDifference>& rows, const 
         for (const std::string& c : cells(r, " ± ")) o << " " << (c.empty() ? "–" : c) << " |";
         o << "\n";
       }
-      o << "\n" << kDifferenceNote << "\n\n";
+      o << "\n" << note << "\n\n";
       break;
     case TableFormat::kCsv:
       o << "method,baseline,weather,pairs,psnr_diff,psnr_ci95,ssim_diff,ssim_ci95,lpips_diff,lpips_ci95\n";
@@ -402,15 +417,15 @@ std::string render_differences(const std::vector<PairedDifference>& rows, const 
       }
       break;
     case TableFormat::kLatex:
-      o << "% " << title << ". " << kDifferenceNote << "\n";
+      o << "% " << title << ". " << note << "\n";
       o << "\\begin{table}[t]\n\\centering\n\\caption{" << latex_escape(title)
         << "}\n\\begin{tabular}{llrrrr}\n\\toprule\nDifference & Weather & Pairs & $\\Delta$PSNR (dB) & "
            "$\\Delta$SSIM & $\\Delta$LPIPS \\\\\n\\midrule\n";
       for (const auto& r : rows) {
         std::vector<std::string> c = cells(r, "$\\pm$");
-        c[0] = r.method + " -- " + r.baseline;
+        c[0] = latex_escape(r.method + " -- " + r.baseline) + (r.other_data ? "$^\\dagger$" : "");
         for (size_t i = 0; i < c.size(); ++i)
-          o << (i ? " & " : "") << (c[i].empty() ? "--" : (i == 0 || i == 1 ? latex_escape(c[i]) : c[i]));
+          o << (i ? " & " : "") << (c[i].empty() ? "--" : (i == 1 ? latex_escape(c[i]) : c[i]));
         o << " \\\\\n";
       }
       o << "\\bottomrule\n\\end{tabular}\n\\end{table}\n\n";
@@ -424,7 +439,7 @@ std::string render_differences(const std::vector<PairedDifference>& rows, const 
         for (const std::string& c : cells(r, " ± ")) o << "<td>" << (c.empty() ? "&ndash;" : html_escape(c)) << "</td>";
         o << "</tr>\n";
       }
-      o << "</tbody>\n</table>\n<p class=\"note\">" << html_escape(kDifferenceNote) << "</p>\n";
+      o << "</tbody>\n</table>\n<p class=\"note\">" << html_escape(note) << "</p>\n";
       break;
   }
   return o.str();
@@ -451,7 +466,7 @@ std::string render_paper_tables(const PaperTables& t, TableFormat format) {
   o += render_cost(t.cost, table4, format);
   if (!t.differences.empty()) {
     separate();
-    o += render_differences(t.differences, "Paired differences", format);
+    o += render_differences(t.differences, "Paired differences", format, t.data_notes);
   }
   return o + document_end(format);
 }

@@ -8,7 +8,8 @@
 // one cell (seeds) show mean ± the half-width of the 95% Student-t interval, and so do averages over
 // scenes when several seeds ran on every scene. A last table gives paired differences (same variant,
 // same seed) with their intervals: WeatherGS - 3DGS, each ablation - the full method, GS-W - 3DGS and
-// DerainNeRF - NeRF.
+// DerainNeRF - NeRF. Results on other data than their variant's are refused or, when allowed, marked
+// (leaderboard.h): in the quality tables' cells, the ablation's averages and the differences' rows.
 #pragma once
 
 #include <string>
@@ -36,6 +37,7 @@ struct CostRow {
 struct PairedDifference {
   std::string method, baseline, weather;
   MeanInterval psnr, ssim, lpips;  // lpips.n == 0 when a pair lacks LPIPS
+  bool other_data = false;         // a pair holds a result on other data than its variant's
 };
 
 struct PaperTables {
@@ -44,9 +46,10 @@ struct PaperTables {
   std::vector<std::string> ablation_variants;  // the variants Table III averages over
   std::vector<CostRow> cost;              // Table IV, in the order of the quality tables' rows
   std::vector<PairedDifference> differences;  // for the comparisons that have pairs
+  std::vector<std::string> data_notes;        // every mixed variant, for the tables that span weathers
 };
 
-PaperTables build_paper_tables(const std::vector<LoadedResults>& results);
+PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const LeaderboardOptions& options = {});
 std::string render_paper_tables(const PaperTables& tables, TableFormat format);
 
 }  // namespace weathergs::evaluator

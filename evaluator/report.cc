@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
 #include "core/image.h"
 #include "core/json_reader.h"
 #include "core/version.h"
@@ -115,6 +116,12 @@ Json stat_cell(double mean, double population_std, int n, int decimals, const st
 // (scene, weather) of the results -> the runs/<variant>/ folder that holds them.
 using VariantOf = std::map<std::pair<std::string, std::string>, std::string>;
 
+// A cell's text with the mixed-data marker when it holds runs on other data.
+Json marked(Json cell, bool other_data) {
+  if (other_data) cell["text"] = cell["text"].get<std::string>() + " " + kOtherDataMarker;
+  return cell;
+}
+
 Json quality_table(const LeaderboardTable& t, const std::string& id, const std::string& to_suite, const VariantOf* variant_of) {
   Json columns = Json::array({{{"key", "method"}, {"label", "method"}}});
   std::vector<std::string> groups = t.scenes;
@@ -136,15 +143,18 @@ Json quality_table(const LeaderboardTable& t, const std::string& id, const std::
       if (!avg && variant_of && s.n > 0)
         if (auto it = variant_of->find({t.scenes[g], t.weather}); it != variant_of->end())
           link = to_suite + "runs/" + it->second + "/" + method + "/";
-      cells[groups[g] + ".psnr"] = stat_cell(s.psnr, s.psnr_std, s.n, 2, link);
-      cells[groups[g] + ".ssim"] = stat_cell(s.ssim, s.ssim_std, s.n, 4, link);
-      cells[groups[g] + ".lpips"] = s.has_lpips ? stat_cell(s.lpips, s.lpips_std, s.n, 4, link) : Json{{"text", "–"}};
+      cells[groups[g] + ".psnr"] = marked(stat_cell(s.psnr, s.psnr_std, s.n, 2, link), s.other_data);
+      cells[groups[g] + ".ssim"] = marked(stat_cell(s.ssim, s.ssim_std, s.n, 4, link), s.other_data);
+      cells[groups[g] + ".lpips"] =
+          s.has_lpips ? marked(stat_cell(s.lpips, s.lpips_std, s.n, 4, link), s.other_data) : Json{{"text", "–"}};
     }
     rows.push_back({{"method", method}, {"reference", ref}, {"cells", cells}});
   }
+  const std::string data = other_data_note(t.data_notes);
   return {{"id", id},
           {"title", t.title.empty() ? "Weather: " + t.weather : t.title},
-          {"note", t.average_note + " Cells over several seeds show mean ± the 95% confidence interval (Student's t)."},
+          {"note", t.average_note + " Cells over several seeds show mean ± the 95% confidence interval (Student's t)." +
+                       (data.empty() ? "" : " " + data)},
           {"columns", columns},
           {"rows", rows}};
 }
@@ -247,7 +257,30 @@ ReportSummary write_report(const ReportOptions& o) {
   const std::vector<Run> runs = find_runs(suite);
   std::vector<LoadedResults> loaded;
   for (const Run& r : runs) loaded.push_back(r.results);
-  const PaperTables paper = build_paper_tables(loaded);  // also checks that the protocols agree
+  LeaderboardOptions board;
+  board.allow_mixed_data = o.allow_mixed_data;
+  // Also checks that the protocols agree, and that each variant's runs were scored on one dataset.
+  const PaperTables paper = build_paper_tables(loaded, board);
+  // The page shows data/<variant>'s inputs and truth beside each run: a run that records its dataset's
+  // identity must have been scored on those very files.
+  std::map<std::string, std::string> data_identity;  // variant -> sha256 of data/<variant>
+  std::set<const Run*> other_data;  // marked: on other data than their variant's runs or data/<variant>
+  const MixedData mixed = find_mixed_data(loaded, board);
+  for (size_t i = 0; i < runs.size(); ++i)
+    if (mixed.is_odd(loaded[i])) other_data.insert(&runs[i]);
+  for (const Run& r : runs) {
+    const fs::path data = suite / "data" / r.variant;
+    if (!fs::exists(data / "dataset.json")) continue;  // refused below, naming the variant
+    if (!data_identity.count(r.variant)) data_identity[r.variant] = compute_dataset_identity(data.string()).sha256;
+    const std::optional<ScoredDataset>& scored = r.results.results.dataset_identity;
+    if (!scored || scored->sha256 == data_identity[r.variant]) continue;
+    if (!o.allow_mixed_data)
+      throw InputError(r.results.path, "scored on other data (dataset identity " + scored->sha256 + ") than " +
+                                           data.string() + " (" + data_identity[r.variant] +
+                                           "), which the report shows beside it: re-run it on that dataset, or pass "
+                                           "--allow-mixed-data to mark it");
+    other_data.insert(&r);
+  }
 
   AtomicDirectory dir(o.out_dir);
   const fs::path out(dir.path());
@@ -282,10 +315,12 @@ ReportSummary write_report(const ReportOptions& o) {
     Json columns = Json::array({{{"id", "input"}, {"label", "weathered input"}, {"kind", "input"}}});
     for (const Run* r : vruns)
       columns.push_back({{"id", r->column},
-                         {"label", r->method + " (seed " + std::to_string(r->seed) + ")"},
+                         {"label", r->method + " (seed " + std::to_string(r->seed) + ")" +
+                                       (other_data.count(r) ? std::string(" ") + kOtherDataMarker : "")},
                          {"kind", "method"},
                          {"method", r->method},
                          {"seed", r->seed},
+                         {"other_data", other_data.count(r) > 0},
                          {"run", to_suite + fs::relative(r->dir, suite).generic_string() + "/"}});
     columns.push_back({{"id", "gt"}, {"label", "ground truth"}, {"kind", "truth"}});
     Json overlays = Json::array();
@@ -357,7 +392,9 @@ ReportSummary write_report(const ReportOptions& o) {
                         {"columns", columns},
                         {"overlays", overlays},
                         {"views", jviews}});
-    datasets.push_back({{"name", variant}, {"ground_truth_sha256", vruns.front()->results.results.sha256_ground_truth}});
+    datasets.push_back({{"name", variant},
+                        {"ground_truth_sha256", vruns.front()->results.results.sha256_ground_truth},
+                        {"dataset_identity", data_identity[variant]}});
     ++summary.variants;
   }
   report["variants"] = variants;
@@ -384,6 +421,8 @@ ReportSummary write_report(const ReportOptions& o) {
                      {"method", r.method},
                      {"seed", r.seed},
                      {"path", to_suite + fs::relative(r.dir, suite).generic_string() + "/"},
+                     {"dataset_identity", short_dataset_identity(r.results.results)},
+                     {"other_data", other_data.count(&r) > 0},
                      {"train_seconds", mi.value("train_seconds", Json(nullptr))},
                      {"peak_rss_mb", mi.value("peak_rss_mb", Json(nullptr))},
                      {"num_gaussians", mi.value("num_gaussians", Json(nullptr))}});

@@ -24,6 +24,10 @@ struct ReportOptions {
   // record themselves (the LPIPS model): name -> sha256.
   std::string command;
   std::vector<std::pair<std::string, std::string>> extra_weights;
+  // Runs of one variant scored on datasets of different identities, or on another dataset than the
+  // suite's data/<variant> that the page shows beside them: marked instead of refused
+  // (evaluator/leaderboard.h).
+  bool allow_mixed_data = false;
   void validate() const;  // InputError naming the field
 };
 
@@ -34,7 +38,9 @@ struct ReportSummary {
 };
 
 // InputError (naming the folder or file) when the suite has no runs, a run's results or renders are
-// missing or unreadable, or a variant's dataset is absent.
+// missing or unreadable, a variant's dataset is absent, or (unless allow_mixed_data) a run that
+// records its dataset's identity was scored on other data than its variant's other runs or than
+// data/<variant>. Runs that record no identity are compared with each other only.
 ReportSummary write_report(const ReportOptions& options);
 
 // The 95% confidence interval's half-width of a mean over n values with sample standard deviation

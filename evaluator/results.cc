@@ -77,6 +77,45 @@ MetricValues metrics_from_json(const JsonReader& r) {
 
 Json metrics_to_json(const MetricValues& m) { return json_fields::write(m, kMetricFields); }
 
+namespace {
+constexpr const char* kDiffersFromRecorded = "differs_from_recorded";
+
+Json scored_dataset_to_json(const ScoredDataset& d) {
+  Json j = {{"scheme", DatasetIdentity::kScheme}, {"sha256", d.sha256}, {"file_count", d.file_count}};
+  if (d.recorded_sha256)
+    j[kDiffersFromRecorded] = {{"sha256", *d.recorded_sha256}, {"first_difference", d.first_difference.value_or("")}};
+  return j;
+}
+
+ScoredDataset scored_dataset_from_json(const JsonReader& r) {
+  if (!r.is_object()) throw InputError(r.where(), "expected a dataset identity {scheme, sha256, file_count}");
+  ScoredDataset d;
+  if (r.has(kDiffersFromRecorded)) {  // read first: DatasetIdentity::from_json refuses keys it does not know
+    const JsonReader c = r.child(kDiffersFromRecorded);
+    d.recorded_sha256 = c.get<std::string>("sha256");
+    d.first_difference = c.get<std::string>("first_difference");
+    c.finish();
+  }
+  d.file_count = r.get<size_t>("file_count");
+  if (r.has("files")) throw InputError(r.where("files"), "results record the identity without its files");
+  d.sha256 = DatasetIdentity::from_json(r).sha256;  // checks the scheme and the hash's form
+  return d;
+}
+}  // namespace
+
+bool dataset_identity_differs(const Results& a, const Results& b) {
+  if (!a.dataset_identity || !b.dataset_identity) return a.dataset_identity.has_value() != b.dataset_identity.has_value();
+  return a.dataset_identity->sha256 != b.dataset_identity->sha256;
+}
+
+std::string short_dataset_identity(const Results& r) {
+  return r.dataset_identity ? r.dataset_identity->sha256.substr(0, 12) : "unknown";
+}
+
+std::string dataset_identity_text(const Results& r) {
+  return r.dataset_identity ? r.dataset_identity->sha256 : "none recorded";
+}
+
 Json results_to_json(const Results& r) {
   Json per_view = Json::object();
   for (const auto& [view, v] : r.per_view) per_view[view] = metrics_to_json(v);
@@ -86,6 +125,7 @@ Json results_to_json(const Results& r) {
             {"metrics", metrics_to_json(r.metrics)}, {"per_view", per_view},
             {"method_info", r.method_info},
             {"sha256", {{"renders", r.sha256_renders}, {"ground_truth", r.sha256_ground_truth}}}};
+  if (r.dataset_identity) j["dataset_identity"] = scored_dataset_to_json(*r.dataset_identity);
   return j;
 }
 
@@ -123,6 +163,7 @@ Results results_from_json(const JsonReader& r) {
     out.sha256_ground_truth = s.get_or<std::string>("ground_truth", "");
     s.finish();
   }
+  if (r.has("dataset_identity")) out.dataset_identity = scored_dataset_from_json(r.child("dataset_identity"));
   r.finish();
   return out;
 }

@@ -3,6 +3,8 @@
 // PSNR of identical images is +infinity. JSON has no infinity, so it is written as
 // "psnr": null together with "psnr_infinite": true (documented in docs/evaluator.md); readers turn
 // that back into +inf. A skipped LPIPS (--no-lpips) is "lpips": null and protocol.lpips = null.
+// The dataset scored against is recorded as "dataset_identity" (docs/formats.md, "Dataset identity");
+// results written before it was recorded have none and read as an unknown dataset.
 #pragma once
 
 #include <map>
@@ -10,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/dataset_identity.h"
 #include "core/json_reader.h"
 
 namespace weathergs::evaluator {
@@ -42,6 +45,16 @@ struct Protocol {
   std::string to_string() const;
 };
 
+// What results.json records of the dataset it was scored against.
+// {"scheme": DatasetIdentity::kScheme, "sha256", "file_count"[, "differs_from_recorded"]}.
+struct ScoredDataset {
+  std::string sha256;     // DatasetIdentity::sha256 of the files when they were scored
+  size_t file_count = 0;  // how many files (and pseudo-files) it covers; the list is not written
+  // Set only when the files no longer matched the identity their dataset.json records and scoring was
+  // allowed anyway (evaluate --allow-changed-dataset): that record's sha256 and the first difference.
+  std::optional<std::string> recorded_sha256, first_difference;
+};
+
 struct Results {
   std::string method, dataset, scene, weather;
   Protocol protocol;
@@ -49,7 +62,16 @@ struct Results {
   std::vector<std::pair<std::string, MetricValues>> per_view;  // split order
   Json method_info = Json::object();
   std::string sha256_renders, sha256_ground_truth;
+  std::optional<ScoredDataset> dataset_identity;  // nullopt: scored before identities were recorded
 };
+
+// Whether two results cannot count as scored on the same data: their identities differ, or only one
+// records one. Two results that both record none are not known to differ (as before identities).
+bool dataset_identity_differs(const Results& a, const Results& b);
+// The identity's first 12 hex digits, for tables and messages; "unknown" when none is recorded.
+std::string short_dataset_identity(const Results& r);
+// The whole sha256, or "none recorded".
+std::string dataset_identity_text(const Results& r);
 
 // Mean of per-view values (PSNR averaged per view, as 3DGS reports it; +inf if any view is +inf).
 MetricValues mean_metrics(const std::vector<std::pair<std::string, MetricValues>>& per_view);

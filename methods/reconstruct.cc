@@ -233,6 +233,10 @@ evaluator::Results evaluate_stage(const Run& run, const std::string& renders_dir
   res.method_info["method_description"] = run.method.description;
   res.method_info["weights"] = weights_record(run);
   res.method_info["seed"] = run.o.train.seed;  // pairs runs across methods (leaderboard --paper)
+  // The 3DGS schedule is part of the recipe that `check` compares; a radiance field's length is its
+  // iterations, which its renders record.
+  if (run.recipe().backend != BackendKind::kNerf)
+    res.method_info["schedule"] = reconstruction::to_string(run.o.train.schedule);
   // Restoration time is part of a method's cost (Table IV): the AEF's and the LED's own reports.
   auto report_seconds = [&](const fs::path& report) {
     return fs::exists(report) ? read_json_file(report.string()).value("seconds", 0.0) : 0.0;
@@ -307,6 +311,7 @@ ReconstructResult reconstruct(const ReconstructOptions& given, const reconstruct
   given.validate();
   check_resources(given);
   const Dataset ds = read_dataset(given.dataset);
+  evaluator::identify_dataset(ds, false);  // files that no longer match their record: refused now, not after training
   // The run's length and budget for this dataset: snapshots, records and staleness all use them.
   ReconstructOptions o = given;
   o.train = reconstruction::run_length_for(given.train, ds);

@@ -363,11 +363,14 @@
     const runTable = {
       columns: [{ key: 'variant', label: 'variant' }, { key: 'method', label: 'method' }, { key: 'seed', label: 'seed' },
         { key: 'train_seconds', label: 'training (s)' }, { key: 'peak_rss_mb', label: 'peak memory (MiB)' },
-        { key: 'num_gaussians', label: 'Gaussians' }, { key: 'path', label: 'run folder' }],
+        { key: 'num_gaussians', label: 'Gaussians' }, { key: 'dataset_identity', label: 'dataset identity' },
+        { key: 'path', label: 'run folder' }],
       rows: runs.map((r) => ({ reference: false, cells: {
         variant: { text: r.variant }, method: { text: r.method }, seed: numberCell(r.seed, 0),
         train_seconds: numberCell(r.train_seconds, 1, fixed), peak_rss_mb: numberCell(r.peak_rss_mb, 0),
-        num_gaussians: numberCell(r.num_gaussians, 0), path: { text: r.path, link: r.path } } })),
+        num_gaussians: numberCell(r.num_gaussians, 0),
+        dataset_identity: { text: (r.dataset_identity || DASH) + (r.other_data ? ' \u2020' : '') },
+        path: { text: r.path, link: r.path } } })),
     };
     return [
       cost && (cost.rows || []).length ? sortableTable('cost', cost) : el('p', { class: 'muted' }, 'No cost table in this report.'),
@@ -377,17 +380,21 @@
   }
 
   function provenanceSection(p) {
-    const hashes = (list, key, header) => (list && list.length
-      ? el('table', { class: 'data hashes' }, el('thead', null, el('tr', null, el('th', null, 'name'), el('th', null, header))),
-        el('tbody', null, list.map((w) => el('tr', null, el('td', null, w.name), el('td', null, el('code', null, w[key] || DASH))))))
+    // One row per entry: its name, then one column per [key, header].
+    const hashes = (list, columns) => (list && list.length
+      ? el('table', { class: 'data hashes' },
+        el('thead', null, el('tr', null, el('th', null, 'name'), columns.map(([, header]) => el('th', null, header)))),
+        el('tbody', null, list.map((w) => el('tr', null, el('td', null, w.name),
+          columns.map(([key]) => el('td', null, el('code', null, w[key] || DASH)))))))
       : el('p', { class: 'muted' }, 'none'));
     return [
       el('dl', { class: 'prov' },
         el('dt', null, 'commit'), el('dd', null, el('code', null, p.commit || DASH)),
         el('dt', null, 'protocol'), el('dd', null, el('code', null, p.protocol || DASH)),
         el('dt', null, 'command'), el('dd', null, el('code', null, p.command || DASH))),
-      el('h3', null, 'Weights'), hashes(p.weights, 'sha256', 'sha256'),
-      el('h3', null, 'Datasets'), hashes(p.datasets, 'ground_truth_sha256', 'ground-truth sha256'),
+      el('h3', null, 'Weights'), hashes(p.weights, [['sha256', 'sha256']]),
+      el('h3', null, 'Datasets'), hashes(p.datasets, [['dataset_identity', 'dataset identity (sha256)'],
+        ['ground_truth_sha256', 'ground-truth sha256']]),
     ];
   }
 

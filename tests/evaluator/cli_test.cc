@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "core/atomic_file.h"
+#include "core/dataset_identity.h"
 #include "core/image.h"
 #include "core/json_reader.h"
 #include "tests/core/test_util.h"
@@ -310,6 +311,91 @@ TEST_F(EvaluatorCli, ExportsNerfBaselinesLayoutMatchingItsReferenceHashes) {
   expect_bad_input(kBin + " export-nerfbaselines --results " + (dir / "masked.json") + " --data " + ds() +
                        " --out " + (dir / "nb3") + " --renders " + renders("box-blur"),
                    "masked metrics", dir / "nb3");
+}
+
+// Flips the bits of one byte in the middle of a file.
+void flip_byte(const std::string& path) {
+  std::string bytes = read_file(path);
+  bytes[bytes.size() / 2] = char(~bytes[bytes.size() / 2]);
+  write_file_atomic(path, bytes);
+}
+
+// One byte of a weathered input changed (the ground truth untouched, so sha256.ground_truth cannot
+// tell): evaluate refuses the dataset against its recorded identity; a regenerated copy (its record
+// made anew) is scored, and then leaderboard and check refuse to put the two side by side.
+TEST_F(EvaluatorCli, ADatasetWithOneByteChangedIsRefused) {
+  TempDir dir;
+  const std::string changed = dir / "park_rain";
+  fs::copy(ds(), changed, fs::copy_options::recursive);
+  const std::string a = dir / "a.json", b = dir / "b.json";
+  const std::string eval = kBin + " --quiet evaluate --no-lpips --renders " + renders("noise") + " --gt ";
+  ASSERT_EQ(run_command(eval + ds() + " -o " + a).exit_code, 0);
+  const Json ja = read_json_file(a);
+  const std::string id_a = ja.at("dataset_identity").at("sha256");
+  EXPECT_EQ(ja.at("dataset_identity").at("scheme"), DatasetIdentity::kScheme);
+  EXPECT_EQ(id_a, compute_dataset_identity(ds()).sha256);
+  EXPECT_EQ(ja.at("dataset_identity").at("file_count"), 9 * 2 + 2) << "images/, clean/, cameras.json, splits";
+  EXPECT_FALSE(ja.at("dataset_identity").contains("differs_from_recorded"));
+
+  flip_byte(changed + "/images/008.png");
+  expect_bad_input(eval + changed + " -o " + b, "images/008.png differs", b);
+  auto refused = run_command(eval + changed + " -o " + b);
+  EXPECT_NE(refused.output.find(changed), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("--allow-changed-dataset"), std::string::npos) << refused.output;
+  // Scored anyway when asked, and the results say so.
+  auto forced = run_command(eval + changed + " -o " + (dir / "forced.json") + " --allow-changed-dataset");
+  ASSERT_EQ(forced.exit_code, 0) << forced.output;
+  EXPECT_NE(forced.output.find("warning"), std::string::npos) << forced.output;
+  const Json jf = read_json_file(dir / "forced.json");
+  EXPECT_EQ(jf.at("dataset_identity").at("differs_from_recorded").at("first_difference"), "images/008.png differs");
+  EXPECT_EQ(jf.at("dataset_identity").at("differs_from_recorded").at("sha256"), id_a);
+  // Regenerated: the record made anew, then scored as any dataset.
+  Json dj = read_json_file(changed + "/dataset.json");
+  dj["identity"] = compute_dataset_identity(changed).to_json(true);
+  write_file_atomic(changed + "/dataset.json", dj.dump(2));
+  ASSERT_EQ(run_command(eval + changed + " -o " + b).exit_code, 0);
+  const std::string id_b = read_json_file(b).at("dataset_identity").at("sha256");
+  EXPECT_NE(id_b, id_a);
+  EXPECT_EQ(read_json_file(b).at("sha256").at("ground_truth"), ja.at("sha256").at("ground_truth"));
+
+  // leaderboard: one column, two datasets: refused naming both files and both hashes.
+  const std::string board = dir / "board.md";
+  auto lb = run_command(kBin + " leaderboard " + a + " " + b + " -o " + board);
+  EXPECT_EQ(lb.exit_code, 2) << lb.output;
+  for (const std::string& s : {a, b, id_a, id_b, std::string("--allow-mixed-data")})
+    EXPECT_NE(lb.output.find(s), std::string::npos) << s << "\n" << lb.output;
+  EXPECT_FALSE(fs::exists(board));
+  EXPECT_EQ(run_command(kBin + " leaderboard --paper " + a + " " + b + " -o " + board).exit_code, 2);
+  lb = run_command(kBin + " leaderboard --allow-mixed-data " + a + " " + b + " -o " + board);
+  ASSERT_EQ(lb.exit_code, 0) << lb.output;
+  const std::string md = read_file(board);
+  EXPECT_NE(md.find("†"), std::string::npos) << md;
+  EXPECT_NE(md.find(id_a.substr(0, 12)), std::string::npos) << md;
+  EXPECT_NE(md.find(id_b.substr(0, 12)), std::string::npos) << md;
+  // Results from before identities (none recorded) among them: not known to be on the same data.
+  Json old = read_json_file(a);
+  old.erase("dataset_identity");
+  write_file_atomic(dir / "old.json", old.dump(2));
+  EXPECT_EQ(run_command(kBin + " leaderboard " + a + " " + (dir / "old.json")).exit_code, 2);
+  EXPECT_EQ(run_command(kBin + " leaderboard " + (dir / "old.json") + " " + (dir / "old.json")).exit_code, 0);
+
+  // check: the baseline's data and the new data differ: refused, unless allowed, which it notes.
+  auto chk = run_command(kBin + " check --baseline " + a + " --results " + b);
+  EXPECT_EQ(chk.exit_code, 2) << chk.output;
+  EXPECT_NE(chk.output.find(id_b), std::string::npos) << chk.output;
+  EXPECT_NE(chk.output.find("--allow-other-data"), std::string::npos) << chk.output;
+  chk = run_command(kBin + " check --allow-other-data --baseline " + a + " --results " + b);
+  EXPECT_EQ(chk.exit_code, 0) << chk.output;
+  EXPECT_NE(chk.output.find("other data than the baseline (allowed)"), std::string::npos) << chk.output;
+
+  // A dataset that records no identity (made before identities, or by other tools) is scored with the computed one.
+  dj = read_json_file(ds() + "/dataset.json");
+  dj.erase("identity");
+  fs::remove_all(changed);
+  fs::copy(ds(), changed, fs::copy_options::recursive);
+  write_file_atomic(changed + "/dataset.json", dj.dump(2));
+  ASSERT_EQ(run_command(eval + changed + " -o " + (dir / "unrecorded.json")).exit_code, 0);
+  EXPECT_EQ(read_json_file(dir / "unrecorded.json").at("dataset_identity").at("sha256"), id_a);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "core/atomic_file.h"
+#include "core/dataset_identity.h"
 #include "core/json_reader.h"
 #include "evaluator/report.h"
 #include "evaluator/results.h"
@@ -91,7 +92,17 @@ TEST(Report, EmbeddedDataEqualsTheResultsFiles) {
         if (row.at("method") == "noise" && cell.contains("ci95")) interval = true;
   EXPECT_TRUE(interval);
   EXPECT_FALSE(d.at("provenance").at("commit").get<std::string>().empty());
-  EXPECT_EQ(d.at("provenance").at("datasets").size(), 2u);
+  ASSERT_EQ(d.at("provenance").at("datasets").size(), 2u);
+  // Each dataset's identity, and each run's (short): the runs were scored on the data shown.
+  for (const Json& ds : d.at("provenance").at("datasets")) {
+    const std::string id = compute_dataset_identity(suite + "/data/" + ds.at("name").get<std::string>()).sha256;
+    EXPECT_EQ(ds.at("dataset_identity"), id);
+    for (const Json& run : d.at("runs"))
+      if (run.at("variant") == ds.at("name")) {
+        EXPECT_EQ(run.at("dataset_identity"), id.substr(0, 12));
+        EXPECT_EQ(run.at("other_data"), false);
+      }
+  }
   // A report of this size stays small.
   uintmax_t bytes = 0;
   for (const auto& e : fs::recursive_directory_iterator(report))
@@ -118,6 +129,68 @@ TEST(Report, BadSuitesAreRefusedAndLeaveNothing) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("park_snow"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(tmp / "rep"));
+}
+
+void flip_byte(const std::string& path) {
+  std::string bytes = read_file(path);
+  bytes[bytes.size() / 2] = char(~bytes[bytes.size() / 2]);
+  write_file_atomic(path, bytes);
+}
+
+// A run scored on other data than the page shows beside it, or than its variant's other runs, is
+// refused (leaving nothing) unless --allow-mixed-data, which marks it.
+TEST(Report, RunsOnOtherDataAreRefusedOrMarked) {
+  TempDir tmp;
+  const std::string suite = make_suite(tmp), report = tmp / "report";
+  const std::string make_report = kBin + " --quiet report " + suite + " -o " + report;
+  // data/park_snow changed after its runs were scored.
+  flip_byte(suite + "/data/park_snow/images/000.png");
+  auto r = run_command(make_report);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("runs/park_snow/"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("data/park_snow"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--allow-mixed-data"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(report));
+  flip_byte(suite + "/data/park_snow/images/000.png");  // back as it was
+  // One seed of park_rain's noise scored on a regenerated copy: two datasets in one variant.
+  const std::string other = tmp / "other";
+  copy_tree(suite + "/data/park_rain", other);
+  flip_byte(other + "/images/000.png");
+  Json dj = read_json_file(other + "/dataset.json");
+  dj["identity"] = compute_dataset_identity(other).to_json(true);
+  write_file_atomic(other + "/dataset.json", dj.dump(2));
+  const std::string run = suite + "/runs/park_rain/noise/seed2";
+  r = run_command(kBin + " --quiet evaluate --gt " + other + " --renders " + run + "/renders/test -o " + run + "/results.json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = run_command(make_report);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("seed2/results.json"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(report));
+  r = run_command(make_report + " --allow-mixed-data");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Json d = read_data_js(report);
+  const std::string other_id = compute_dataset_identity(other).sha256;
+  int marked_runs = 0;
+  for (const Json& run_entry : d.at("runs")) {
+    const bool odd = run_entry.at("variant") == "park_rain" && run_entry.at("seed") == 2;
+    EXPECT_EQ(run_entry.at("other_data"), odd) << run_entry.dump();
+    if (odd) EXPECT_EQ(run_entry.at("dataset_identity"), other_id.substr(0, 12));
+    marked_runs += odd;
+  }
+  EXPECT_EQ(marked_runs, 1);
+  bool marked_cell = false, noted = false;
+  for (const Json& t : d.at("tables")) {
+    noted = noted || t.at("note").get<std::string>().find(other_id.substr(0, 12)) != std::string::npos;
+    for (const Json& row : t.at("rows"))
+      for (const auto& [key, cell] : row.at("cells").items())
+        if (cell.at("text").get<std::string>().find("†") != std::string::npos) {
+          EXPECT_EQ(row.at("method"), "noise") << key;
+          marked_cell = true;
+        }
+  }
+  EXPECT_TRUE(marked_cell);
+  EXPECT_TRUE(noted);
+  EXPECT_NE(d.at("provenance").at("command").get<std::string>().find("--allow-mixed-data"), std::string::npos);
 }
 
 }  // namespace

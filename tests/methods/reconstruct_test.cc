@@ -8,6 +8,7 @@
 
 #include "core/atomic_file.h"
 #include "core/dataset.h"
+#include "core/dataset_identity.h"
 #include "core/json_reader.h"
 #include "capture/process.h"
 #include "restoration/led/lens_detector.h"
@@ -118,6 +119,10 @@ TEST(ReconstructTest, EachMethodTrainsOnItsRecipeAndWritesACompleteRun) {
     EXPECT_TRUE(res.method_info.contains("train_seconds") && res.method_info.contains("render_seconds"));
     EXPECT_TRUE(res.method_info.contains("peak_rss_mb"));
     EXPECT_EQ(res.method_info.at("initialization"), "random (the dataset has no SfM points)");
+    // What `check` compares: the data scored on, and the 3DGS schedule (a field's length is its iterations).
+    EXPECT_TRUE(res.dataset_identity);
+    if (nerf) EXPECT_FALSE(res.method_info.contains("schedule"));
+    else EXPECT_EQ(res.method_info.at("schedule"), reconstruction::to_string(o.train.schedule));
     EXPECT_GT(r.train_seconds, 0);
     psnr[m] = r.results.metrics.psnr;
   }
@@ -301,6 +306,26 @@ TEST(ReconstructTest, AMissingResourceStopsTheRunBeforeAnyWork) {
   write_file_atomic(tmp / "a_file", "x");
   EXPECT_EQ(run_cli("reconstruct --data " + data + " --method 3dgs --no-lpips --out " + (tmp / "a_file/run"), tmp / "f.log"), 2);
   EXPECT_NE(read_file(tmp / "f.log").find("not a folder"), std::string::npos) << read_file(tmp / "f.log");
+}
+
+// A dataset whose files no longer match the identity its dataset.json records is refused before any
+// stage, not by the evaluation after training.
+TEST(ReconstructTest, AChangedDatasetIsRefusedBeforeAnyWork) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  Dataset ds = read_dataset(data);
+  ds.info.identity = compute_dataset_identity(data).to_json(true);
+  write_dataset_json(ds.file(layout::kDatasetJson), ds.info);
+  std::string bytes = read_file(data + "/images/003.png");
+  bytes[bytes.size() / 2] = char(~bytes[bytes.size() / 2]);
+  write_file_atomic(data + "/images/003.png", bytes);
+  try {
+    reconstruct(options(data, tmp / "run", Method::k3dgs));
+    ADD_FAILURE() << "a changed dataset was reconstructed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("images/003.png differs"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(tmp / "run")) << "refused before the run folder is made";
 }
 
 // One rule for every stage: an output left by an earlier run is reused when its settings record
