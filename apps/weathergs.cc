@@ -12,6 +12,7 @@
 #include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "core/version.h"
 
 namespace weathergs::cli {
 
@@ -103,7 +104,7 @@ int main(int argc, char** argv) {
                "Exit codes: 0 ok, 1 a check failed, 2 bad input, usage or environment, 3 internal error, "
                "4 a computation diverged (e.g. training)."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "weathergs 0.1.0");
+  app.set_version_flag("--version", std::string("weathergs 0.1.0 (") + source_commit() + ")");
   bool quiet = false;
   int threads = 0;
   app.add_flag("-q,--quiet", quiet, "No progress bars")->configurable(false);
