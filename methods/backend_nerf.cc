@@ -13,7 +13,9 @@ class FieldBackend final : public Backend {
 
   std::vector<int> snapshots() const override { return scored_snapshots(run_.snapshots, iterations()); }
 
-  StageOutput model_output() const override { return nerf::nerf_run_output(run_.model_dir, iterations()); }
+  StageOutput model_output() const override {
+    return nerf::nerf_run_output(run_.model_dir, run_.dataset, run_.inputs, nerf_);
+  }
 
   TrainOutcome train(const reconstruction::IterationCallback& on_iteration) override {
     nerf::NerfRunOptions t;

@@ -76,6 +76,26 @@ RunRecord read_run_info(const std::string& run_dir) {
   return json_fields::read(r, RunRecord{}, kRunFields, json_fields::Absent::kError);
 }
 
+// A folder as a record names it: absolute, normalised, without a trailing separator, so that one
+// folder named two ways is the same data.
+std::string record_dir(const std::string& dir) {
+  fs::path p = fs::absolute(dir).lexically_normal();
+  if (!p.has_filename() && p.has_parent_path()) p = p.parent_path();
+  return p.string();
+}
+
+// The settings a run is judged by, as its record writes them: the data and every option, the seed
+// included.
+RunRecord settings_record(const std::string& dataset, const TrainInputs& inputs, const NerfOptions& options) {
+  RunRecord rec;
+  rec.dataset = record_dir(dataset);
+  rec.inputs = inputs;
+  for (std::string* dir : {&rec.inputs.images_dir, &rec.inputs.masks_dir, &rec.inputs.points_dir})
+    if (!dir->empty()) *dir = record_dir(*dir);
+  rec.options = options;
+  return rec;
+}
+
 // Renders `names` of the dataset into an atomic folder with info.json.
 NerfRenderResult render_views(const RadianceField& field, const Dataset& ds, const std::vector<std::string>& names,
                               const MarchSettings& march, const std::string& out, const Json& info_base) {
@@ -120,7 +140,8 @@ std::string nerf_snapshot_dir(const std::string& run_dir, int iteration) {
   return (fs::path(run_dir) / "snapshots" / name).string();
 }
 
-StageOutput nerf_run_output(const std::string& run_dir, int iterations) {
+StageOutput nerf_run_output(const std::string& run_dir, const std::string& dataset, const TrainInputs& inputs,
+                            const NerfOptions& options) {
   StageOutput s;
   s.record = (fs::path(run_dir) / kRunJson).string();
   if (!fs::exists(s.record)) return s;
@@ -128,11 +149,19 @@ StageOutput nerf_run_output(const std::string& run_dir, int iterations) {
   if (j.value("format", "") != kNerfRunFormat) {
     s.state = StageOutput::State::kStale;
     s.why = "format: not a radiance field";
-  } else if (j.value("complete", false)) {
-    s.why = settings_mismatch(j, Json{{"iterations", iterations}});
-    s.state = s.why.empty() ? StageOutput::State::kComplete : StageOutput::State::kStale;
+    return s;
   }
-  return s;
+  const RunRecord want = settings_record(dataset, inputs, options);
+  Json data = json_fields::write(want.inputs, kTrainInputsFields);
+  data["dataset"] = want.dataset;
+  s.why = settings_mismatch(j, data);
+  if (s.why.empty()) {
+    if (std::string why = settings_mismatch(j.value("options", Json::object()), want.options.to_json()); !why.empty())
+      s.why = "options." + why;
+  }
+  if (!s.why.empty()) s.state = StageOutput::State::kStale;
+  else if (j.value("complete", false)) s.state = StageOutput::State::kComplete;
+  return s;  // an incomplete run of these settings is absent: without checkpoints it starts over
 }
 
 NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallback& on_iteration) {
@@ -172,10 +201,8 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   double excluded = 0;  // seconds spent on snapshots
   auto info_json = [&](bool complete, double seconds) {
     const GridDims d = trainer.field().dims();
-    RunRecord rec;
+    RunRecord rec = settings_record(o.dataset, o.inputs, o.nerf);
     rec.complete = complete;
-    rec.dataset = fs::absolute(o.dataset).string();
-    rec.inputs = o.inputs;
     rec.iterations = trainer.iteration();
     rec.train_seconds = seconds;
     rec.peak_rss_mb = peak_rss_mb();
@@ -184,7 +211,6 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
     rec.near_m = near;
     rec.near_source = result.near_source;
     rec.frame = frame;
-    rec.options = o.nerf;
     return run_json(rec);
   };
   write_file_atomic((run / kRunJson).string(), info_json(false, 0).dump(2) + "\n");

@@ -47,10 +47,14 @@ struct NerfRunResult {
 using NerfIterationCallback = std::function<void(const NerfIterationStats&)>;
 NerfRunResult train_nerf_run(const NerfRunOptions& options, const NerfIterationCallback& on_iteration = {});
 
-// What the run folder `run_dir` holds against a run of `iterations`: stale when run.json is not a
-// radiance field's or a complete run of another length, complete when it is a complete run of this
-// length, absent otherwise (the field keeps no checkpoints: an incomplete run starts over).
-StageOutput nerf_run_output(const std::string& run_dir, int iterations);
+// What the run folder `run_dir` holds against a run of `options` on `dataset` with `inputs`, by the
+// one resume rule of both backends (reconstruction/run.h run_output): stale when run.json is not a
+// radiance field's, or records other data ("dataset", "images", "masks_dir", ...) or any other option
+// ("options.KEY": the length, the seed, a TV weight, the lattice...), the "why" naming the first that
+// differs; complete when it is a complete run of these settings; absent otherwise (the field keeps no
+// checkpoints: an incomplete run starts over).
+StageOutput nerf_run_output(const std::string& run_dir, const std::string& dataset, const TrainInputs& inputs,
+                            const NerfOptions& options);
 
 // The folder of the renders kept at one snapshot iteration.
 std::string nerf_snapshot_dir(const std::string& run_dir, int iteration);

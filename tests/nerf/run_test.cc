@@ -1,0 +1,121 @@
+// Whole radiance-field runs (nerf/run.h): a finished field is reused only by a run that asks for the
+// settings it records (the data and every option, the seed included); any other setting makes it
+// stale, named, so that methods/ refuses it instead of passing an old field off as a new one.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <functional>
+#include <map>
+
+#include "core/atomic_file.h"
+#include "core/json_reader.h"
+#include "nerf/run.h"
+#include "tests/core/test_util.h"
+#include "tests/generator/test_scene.h"
+
+namespace weathergs::nerf {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A field small and short enough to train in about a second.
+NerfOptions tiny_options() {
+  NerfOptions o;
+  o.iterations = 6;
+  o.batch_rays = 256;
+  o.seed = 4;
+  o.pixels_per_cell = 4;
+  o.depth_cells = 8;
+  o.level_scales = {1.0};
+  o.upsample_at = {};
+  return o;
+}
+
+// Another valid value for every NerfOptions key (run.json's "options"): what the test varies.
+std::map<std::string, std::function<void(NerfOptions&)>> one_change_per_key() {
+  return {
+      {"iterations", [](NerfOptions& o) { o.iterations = 7; }},
+      {"batch_rays", [](NerfOptions& o) { o.batch_rays = 128; }},
+      {"seed", [](NerfOptions& o) { o.seed = 5; }},
+      {"pixels_per_cell", [](NerfOptions& o) { o.pixels_per_cell = 3; }},
+      {"depth_cells", [](NerfOptions& o) { o.depth_cells = 10; }},
+      {"level_scales", [](NerfOptions& o) { o.level_scales = {0.5, 1.0}, o.upsample_at = {3}; }},
+      {"upsample_at", [](NerfOptions& o) { o.upsample_at = {3}, o.level_scales = {0.5, 1.0}; }},
+      {"alpha_init", [](NerfOptions& o) { o.alpha_init = 0.02; }},
+      {"lr_density", [](NerfOptions& o) { o.lr_density = 0.2; }},
+      {"lr_color", [](NerfOptions& o) { o.lr_color = 0.2; }},
+      {"lr_env", [](NerfOptions& o) { o.lr_env = 0.1; }},
+      {"lr_final_factor", [](NerfOptions& o) { o.lr_final_factor = 0.5; }},
+      {"tv_density", [](NerfOptions& o) { o.tv_density = 1e-4; }},
+      {"tv_color", [](NerfOptions& o) { o.tv_color = 1e-4; }},
+      {"tv_fraction", [](NerfOptions& o) { o.tv_fraction = 0.02; }},
+      {"near_m", [](NerfOptions& o) { o.near_m = 1.5; }},
+      {"samples_per_cell", [](NerfOptions& o) { o.march.samples_per_cell = 3; }},
+      {"min_weight", [](NerfOptions& o) { o.march.min_weight = 1e-3f; }},
+      {"min_transmittance", [](NerfOptions& o) { o.march.min_transmittance = 1e-3f; }},
+  };
+}
+
+TEST(NerfRunTest, AFinishedFieldIsReusedOnlyWithEverySettingItRecords) {
+  weathergs::testing::TempDir tmp;
+  weathergs::testing::SceneOptions so;
+  so.views = 4;
+  so.width = 48, so.height = 32, so.fx = 40;
+  weathergs::testing::make_clean_dataset(tmp / "data", so);
+  copy_tree(tmp / "data/clean", tmp / "data/images");
+  NerfRunOptions o;
+  o.dataset = tmp / "data";
+  o.out = tmp / "run";
+  o.nerf = tiny_options();
+  // Before and while training nothing is reusable; an incomplete run of the same settings starts over.
+  EXPECT_EQ(nerf_run_output(o.out, o.dataset, o.inputs, o.nerf).state, StageOutput::State::kAbsent);
+  train_nerf_run(o);
+  const StageOutput same = nerf_run_output(o.out, o.dataset, o.inputs, o.nerf);
+  EXPECT_EQ(same.state, StageOutput::State::kComplete) << same.why;
+  // The same folder named another way is the same data.
+  EXPECT_EQ(nerf_run_output(o.out, tmp / "data/../data/", o.inputs, o.nerf).state, StageOutput::State::kComplete);
+
+  auto stale_because = [&](const std::string& dataset, const TrainInputs& inputs, const NerfOptions& options) {
+    const StageOutput s = nerf_run_output(o.out, dataset, inputs, options);
+    EXPECT_EQ(s.state, StageOutput::State::kStale) << s.why;
+    return s.why;
+  };
+  // Every option: the table must name each key the record holds, so a new option is varied too.
+  const Json recorded = read_json_file(o.out + "/run.json").at("options");
+  const auto changes = one_change_per_key();
+  for (const auto& [key, value] : recorded.items()) EXPECT_TRUE(changes.count(key)) << "vary " << key << " too";
+  for (const auto& [key, change] : changes) {
+    SCOPED_TRACE(key);
+    NerfOptions other = o.nerf;
+    change(other);
+    other.validate("test");
+    const std::string why = stale_because(o.dataset, o.inputs, other);
+    EXPECT_EQ(why.rfind("options.", 0), 0u) << why;  // the first differing key (keys in JSON order)
+    EXPECT_TRUE(why.find(key) != std::string::npos || (key == "upsample_at" && why.find("level_scales") != std::string::npos))
+        << why;
+  }
+  // The data: another dataset folder, other images, masks or points.
+  copy_tree(tmp / "data", tmp / "copy");
+  EXPECT_EQ(stale_because(tmp / "copy", o.inputs, o.nerf).rfind("dataset: ", 0), 0u);
+  TrainInputs clean = o.inputs;
+  clean.images = TrainImages::kClean;
+  EXPECT_EQ(stale_because(o.dataset, clean, o.nerf).rfind("images: ", 0), 0u);
+  TrainInputs masked = o.inputs;
+  masked.masks_dir = tmp / "masks";
+  EXPECT_EQ(stale_because(o.dataset, masked, o.nerf).rfind("masks_dir: ", 0), 0u);
+  TrainInputs points = o.inputs;
+  points.points_dir = tmp / "points";
+  EXPECT_EQ(stale_because(o.dataset, points, o.nerf).rfind("points_dir: ", 0), 0u);
+
+  // An incomplete run is judged by the same rule: stale with other settings, absent with these.
+  Json j = read_json_file(o.out + "/run.json");
+  j["complete"] = false;
+  write_file_atomic(o.out + "/run.json", j.dump());
+  EXPECT_EQ(nerf_run_output(o.out, o.dataset, o.inputs, o.nerf).state, StageOutput::State::kAbsent);
+  NerfOptions seed = o.nerf;
+  seed.seed = 5;
+  EXPECT_EQ(stale_because(o.dataset, o.inputs, seed), "options.seed: holds 4, asked for 5");
+}
+
+}  // namespace
+}  // namespace weathergs::nerf
