@@ -210,9 +210,8 @@ Json weights_record(const Run& run) {
       w["aef"] = aef;
     }
   }
-  const fs::path detect_report = run.dir / kDetectedDir / restoration::led::kDetectReportFile;
-  if (run.recipe().lens_detector && fs::exists(detect_report))
-    w["led"] = read_json_file(detect_report.string()).value("weights_sha256", "");
+  if (run.recipe().lens_detector)
+    w["led"] = restoration::led::read_detect_record((run.dir / kDetectedDir).string()).weights_sha256;
   return w;
 }
 
@@ -244,11 +243,10 @@ evaluator::Results evaluate_stage(const Run& run, const std::string& renders_dir
   if (run.recipe().particle_filter)
     res.method_info["filter_seconds"] = report_seconds(run.dir / kFilteredDir / restoration::aef::kFilterReportFile);
   if (run.recipe().lens_detector) {
-    const fs::path path = run.dir / kDetectedDir / restoration::led::kDetectReportFile;
-    const Json report = fs::exists(path) ? read_json_file(path.string()) : Json::object();
-    res.method_info["detect_seconds"] = report.value("seconds", 0.0);
+    const restoration::led::DetectRecord detect = restoration::led::read_detect_record((run.dir / kDetectedDir).string());
+    res.method_info["detect_seconds"] = detect.seconds;
     // A LED that masked nothing on drops that are there must say so, not pass as a result.
-    const std::string silent = restoration::led::silent_led_warning(report);
+    const std::string silent = restoration::led::silent_led_warning(detect);
     if (!silent.empty()) {
       run.stage("warning: " + silent);
       res.method_info["warnings"] = Json::array({silent});

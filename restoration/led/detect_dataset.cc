@@ -142,8 +142,9 @@ Image coverage_mask(const std::string& path, double threshold, const Camera& c) 
 }
 
 Json score_json(const std::string& what, const LedScore& g, size_t views) {
-  return {{"masks", what}, {"views", views}, {"iou", g.iou}, {"precision", g.precision}, {"recall", g.recall},
-          {"gt_fraction", g.gt_fraction}, {"mask_fraction", g.mask_fraction}};
+  using namespace detect_key;
+  return {{kScoreMasks, what}, {kScoreViews, views}, {kScoreIou, g.iou}, {kScorePrecision, g.precision},
+          {kScoreRecall, g.recall}, {kGtFraction, g.gt_fraction}, {kMaskFraction, g.mask_fraction}};
 }
 
 // The network over `views` in chunks of `batch`, results in view order. The chunks run in parallel,
@@ -188,14 +189,15 @@ Image mean_attention(const LensDetector& led, const std::vector<Image>& views, c
 
 Json detect_settings_json(const std::string& weights_sha256, const DetectDatasetOptions& o, const LedMaskOptions& m) {
   WGS_CHECK(m.rule && m.threshold && m.peak && m.dilate_iterations);  // resolved options only
-  return Json{{"weights_sha256", weights_sha256},
-              {"images", o.images_dir.empty() ? std::string(layout::kImagesDir) : fs::absolute(o.images_dir).lexically_normal().string()},
-              {"averaging", to_string(o.averaging)},
-              {"rule", to_string(*m.rule)},
-              {"threshold", *m.rule == LedThresholdRule::kAbove ? Json(*m.threshold) : Json()},
-              {"band", *m.rule == LedThresholdRule::kBand ? Json{m.band_lo, m.band_hi} : Json()},
-              {"peak_rule", *m.rule == LedThresholdRule::kPeak ? m.peak->to_json() : Json()},
-              {"dilate_iterations", *m.dilate_iterations}};
+  using namespace detect_key;
+  return Json{{kWeightsSha256, weights_sha256},
+              {kImages, o.images_dir.empty() ? std::string(layout::kImagesDir) : fs::absolute(o.images_dir).lexically_normal().string()},
+              {kAveraging, to_string(o.averaging)},
+              {kRule, to_string(*m.rule)},
+              {kThreshold, *m.rule == LedThresholdRule::kAbove ? Json(*m.threshold) : Json()},
+              {kBand, *m.rule == LedThresholdRule::kBand ? Json{m.band_lo, m.band_hi} : Json()},
+              {kPeakRule, *m.rule == LedThresholdRule::kPeak ? m.peak->to_json() : Json()},
+              {kDilateIterations, *m.dilate_iterations}};
 }
 
 void use_adapted_peak_rule(LensDetector& led) {
@@ -207,7 +209,7 @@ StageOutput detect_output(const std::string& out, const DetectDatasetOptions& op
   s.record = (fs::path(out) / kDetectReportFile).string();
   if (!fs::exists(s.record)) return s;
   const Json report = read_json_file(s.record);
-  const bool adapted = !report.value("adaptation", Json()).is_null(), asked = !adaptation.is_null();
+  const bool adapted = !report.value(detect_key::kAdaptation, Json()).is_null(), asked = !adaptation.is_null();
   if (adapted != asked) {
     s.why = std::string("made ") + (adapted ? "with" : "without") + " adapting the LED to the dataset, asked for " +
             (adapted ? "without" : "with") + " it";
@@ -216,7 +218,7 @@ StageOutput detect_output(const std::string& out, const DetectDatasetOptions& op
     if (asked) use_adapted_peak_rule(led);
     s.why = settings_mismatch(report, detect_settings_json(led.metadata().value("weights_sha256", ""), options,
                                                            options.mask.resolved(led)));
-    if (s.why.empty() && asked) s.why = settings_mismatch(report.at("adaptation"), adaptation);
+    if (s.why.empty() && asked) s.why = settings_mismatch(report.at(detect_key::kAdaptation), adaptation);
   }
   s.state = s.why.empty() ? StageOutput::State::kComplete : StageOutput::State::kStale;
   return s;
@@ -303,7 +305,8 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
       coverage_truth.push_back(coverage_mask(coverage_path, *coverage_threshold, c));
       coverage_masks.push_back(mask);
     }
-    views.push_back({{"view", v.view}, {"mask_fraction", v.mask_fraction}, {"mean_attention", v.mean_attention}});
+    views.push_back({{detect_key::kView, v.view}, {detect_key::kMaskFraction, v.mask_fraction},
+                     {detect_key::kMeanAttention, v.mean_attention}});
     report.views.push_back(v);
   }
   Json gt_json;
@@ -317,31 +320,51 @@ DetectDatasetReport detect_dataset(const std::string& dataset, const std::string
     report.coverage_threshold = *coverage_threshold;
     coverage_json = score_json(std::string(layout::kLayersDir) + "/" + layout::kLensCoverageLayer, *report.coverage_truth,
                                coverage_truth.size());
-    coverage_json["threshold"] = *coverage_threshold;
+    coverage_json[detect_key::kThreshold] = *coverage_threshold;
   }
   report.seconds = seconds_since(start);
-  Json j{{"format", "weathergs-detect"},
-         {"version", 1},
-         {"dataset", fs::absolute(dataset).lexically_normal().string()},
-         {"weights", fs::absolute(o.weights + ".json").lexically_normal().string()},
-         {"adaptation", adaptation},
-         {"averaged_views", o.averaging == LedAveraging::kTrainViews ? Json(names) : Json()},
-         {"attention", o.save_attention ? Json(kDetectAttentionDir) : Json()},
-         {"ground_truth", gt_json},
-         {"ground_truth_coverage", coverage_json},
-         {"seconds", report.seconds},
-         {"seconds_per_view", report.seconds_per_view},
-         {"views", views}};
+  using namespace detect_key;
+  Json j{{kFormat, kDetectFormat},
+         {kVersion, 1},
+         {kDataset, fs::absolute(dataset).lexically_normal().string()},
+         {kWeights, fs::absolute(o.weights + ".json").lexically_normal().string()},
+         {kAdaptation, adaptation},
+         {kAveragedViews, o.averaging == LedAveraging::kTrainViews ? Json(names) : Json()},
+         {kAttention, o.save_attention ? Json(kDetectAttentionDir) : Json()},
+         {kGroundTruth, gt_json},
+         {kGroundTruthCoverage, coverage_json},
+         {kSeconds, report.seconds},
+         {kSecondsPerView, report.seconds_per_view},
+         {kViews, views}};
   j.update(detect_settings_json(led.metadata().value("weights_sha256", ""), o, mask_options));
   write_file_atomic((fs::path(dir.path()) / kDetectReportFile).string(), j.dump(2) + "\n");
   dir.commit();
   return report;
 }
 
-std::string silent_led_warning(const Json& detect_report) {
-  const auto gt = detect_report.find("ground_truth");
-  if (gt == detect_report.end() || !gt->is_object()) return "";
-  const double truth = gt->value("gt_fraction", 0.0), masked = gt->value("mask_fraction", 0.0);
+DetectRecord read_detect_record(const std::string& out) {
+  using namespace detect_key;
+  const JsonReader r = JsonReader::from_file((fs::path(out) / kDetectReportFile).string());
+  if (r.get<std::string>(kFormat) != kDetectFormat) throw InputError(r.where(kFormat), std::string("expected ") + kDetectFormat);
+  DetectRecord rec;
+  rec.seconds = r.get<double>(kSeconds);
+  rec.weights_sha256 = r.get<std::string>(kWeightsSha256);
+  if (r.has(kGroundTruth) && !r.value()[kGroundTruth].is_null()) {
+    const JsonReader g = r.child(kGroundTruth);
+    LedScore score;
+    score.iou = g.get<double>(kScoreIou);
+    score.precision = g.get<double>(kScorePrecision);
+    score.recall = g.get<double>(kScoreRecall);
+    score.gt_fraction = g.get<double>(kGtFraction);
+    score.mask_fraction = g.get<double>(kMaskFraction);
+    rec.ground_truth = score;
+  }
+  return rec;
+}
+
+std::string silent_led_warning(const DetectRecord& record) {
+  if (!record.ground_truth) return "";
+  const double truth = record.ground_truth->gt_fraction, masked = record.ground_truth->mask_fraction;
   if (truth < kSilentLedTruthFraction || masked >= kSilentLedMaskShare * truth) return "";
   char s[256];
   std::snprintf(s, sizeof s,

@@ -16,6 +16,43 @@
 namespace weathergs::restoration::led {
 
 inline constexpr const char* kDetectReportFile = "detect.json";  // written last: the output is complete
+// detect.json's keys, spelled once: detect_dataset writes them; detect_output, read_detect_record and
+// read_saved_led_map (led_training.h) read them. The settings that decide the masks
+// (detect_settings_json) are weights_sha256, images, averaging, rule, threshold, band, peak_rule and
+// dilate_iterations; ground_truth and ground_truth_coverage hold a score (kScore*).
+namespace detect_key {
+inline constexpr const char* kFormat = "format";  // kDetectFormat
+inline constexpr const char* kVersion = "version";
+inline constexpr const char* kDataset = "dataset";
+inline constexpr const char* kWeights = "weights";
+inline constexpr const char* kWeightsSha256 = "weights_sha256";
+inline constexpr const char* kImages = "images";
+inline constexpr const char* kAveraging = "averaging";
+inline constexpr const char* kRule = "rule";
+inline constexpr const char* kThreshold = "threshold";
+inline constexpr const char* kBand = "band";
+inline constexpr const char* kPeakRule = "peak_rule";
+inline constexpr const char* kDilateIterations = "dilate_iterations";
+inline constexpr const char* kAdaptation = "adaptation";
+inline constexpr const char* kAveragedViews = "averaged_views";
+inline constexpr const char* kAttention = "attention";
+inline constexpr const char* kGroundTruth = "ground_truth";
+inline constexpr const char* kGroundTruthCoverage = "ground_truth_coverage";
+inline constexpr const char* kSeconds = "seconds";
+inline constexpr const char* kSecondsPerView = "seconds_per_view";
+inline constexpr const char* kViews = "views";  // per view: kView, kMaskFraction, kMeanAttention
+inline constexpr const char* kView = "view";
+inline constexpr const char* kMeanAttention = "mean_attention";
+// A score (LedScore) against the dataset's truth: which masks, over how many views, and the counts.
+inline constexpr const char* kScoreMasks = "masks";
+inline constexpr const char* kScoreViews = "views";
+inline constexpr const char* kScoreIou = "iou";
+inline constexpr const char* kScorePrecision = "precision";
+inline constexpr const char* kScoreRecall = "recall";
+inline constexpr const char* kGtFraction = "gt_fraction";
+inline constexpr const char* kMaskFraction = "mask_fraction";
+}  // namespace detect_key
+inline constexpr const char* kDetectFormat = "weathergs-detect";
 // With save_attention: the soft attention each mask was thresholded from, <out>/attention/<view>.png
 // (16-bit, value = attention in [0, 1]), for choosing a threshold without rerunning the network.
 inline constexpr const char* kDetectAttentionDir = "attention";
@@ -121,13 +158,22 @@ StageOutput detect_output(const std::string& out, const DetectDatasetOptions& op
 // and detect.json last, atomically. InputError names the dataset, view, weights or option.
 DetectDatasetReport detect_dataset(const std::string& dataset, const std::string& out, const DetectDatasetOptions& options);
 
+// What a finished detect.json tells the layers above (methods/: the cost, the weights, the warning).
+struct DetectRecord {
+  double seconds = 0;               // the whole detection, adaptation included
+  std::string weights_sha256;
+  std::optional<LedScore> ground_truth;  // against masks/lens, when the dataset has them
+};
+// Reads <out>/detect.json as detect_dataset writes it; InputError naming the file and key.
+DetectRecord read_detect_record(const std::string& out);
+
 // A LED that fails silently: where the dataset's ground-truth drops cover at least
 // kSilentLedTruthFraction of the scored views' pixels and the masks cover less than
 // kSilentLedMaskShare of what they do, the warning to show (naming both fractions); empty otherwise,
-// and for a detect.json without ground truth. Reads a detect.json as detect_dataset writes it.
+// and for a record without ground truth.
 inline constexpr double kSilentLedTruthFraction = 0.1;  // "a tenth or more of the views"
 inline constexpr double kSilentLedMaskShare = 0.01;     // a hundredth of the truth: "masks nothing"
-std::string silent_led_warning(const Json& detect_report);
+std::string silent_led_warning(const DetectRecord& record);
 
 // The mean attention of `views` (sRGB images of one size): the averaging step on its own (calibration).
 Image mean_attention(const LensDetector& led, const std::vector<Image>& views, const std::string& where, int batch = 1);

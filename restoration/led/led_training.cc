@@ -64,25 +64,26 @@ SavedLedMap read_saved_led_map(const std::string& detect_dir) {
     throw InputError(detect_dir, std::string("is not a finished `weathergs detect` output: no ") + kDetectReportFile);
   const JsonReader r = JsonReader::from_file(report_path.string());
   const Json& j = r.value();
-  if (j.value("format", "") != "weathergs-detect") throw InputError(r.where("format"), "expected \"weathergs-detect\"");
-  if (!j.contains("attention") || j["attention"].is_null())
+  using namespace detect_key;
+  if (j.value(kFormat, "") != kDetectFormat) throw InputError(r.where(kFormat), std::string("expected \"") + kDetectFormat + "\"");
+  if (!j.contains(kAttention) || j[kAttention].is_null())
     throw InputError(report_path.string(), "was written without --save-attention: run `weathergs detect ... --save-attention` again");
-  if (j.value("averaging", std::string()) != to_string(LedAveraging::kTrainViews))
-    throw InputError(r.where("averaging"), std::string("expected \"") + to_string(LedAveraging::kTrainViews) +
+  if (j.value(kAveraging, std::string()) != to_string(LedAveraging::kTrainViews))
+    throw InputError(r.where(kAveraging), std::string("expected \"") + to_string(LedAveraging::kTrainViews) +
                                                "\": a calibration scores the one mask averaged over the training views");
-  const std::vector<std::string> views = r.get<std::vector<std::string>>("averaged_views");
-  if (views.empty()) throw InputError(r.where("averaged_views"), "is empty");
-  const std::string dataset = r.get<std::string>("dataset");
+  const std::vector<std::string> views = r.get<std::vector<std::string>>(kAveragedViews);
+  if (views.empty()) throw InputError(r.where(kAveragedViews), "is empty");
+  const std::string dataset = r.get<std::string>(kDataset);
   const Dataset ds = read_dataset(dataset);
   SavedLedMap out;
-  out.weights_sha256 = j.value("weights_sha256", "");
-  out.adaptation = j.contains("adaptation") ? j["adaptation"] : Json();
+  out.weights_sha256 = j.value(kWeightsSha256, "");
+  out.adaptation = j.contains(kAdaptation) ? j[kAdaptation] : Json();
   out.map.name = dataset_name(dataset);
   if (views != ds.split("train"))
-    throw InputError(r.where("averaged_views"), "differs from the training split of " + dataset + ": the dataset changed since");
+    throw InputError(r.where(kAveragedViews), "differs from the training split of " + dataset + ": the dataset changed since");
   read_truth(ds, views, out.map);
   // Every view's saved map is the same averaged one in train-views mode: the first stands for all.
-  const std::string map_path = (fs::path(detect_dir) / j["attention"].get<std::string>() / (views[0] + layout::kImageExt)).string();
+  const std::string map_path = (fs::path(detect_dir) / j[kAttention].get<std::string>() / (views[0] + layout::kImageExt)).string();
   out.map.attention = read_image(map_path);  // 16-bit PNG: the value is the attention
   const Camera& c = ds.camera(views[0]);
   if (out.map.attention.channels != 1 || out.map.attention.width != c.width || out.map.attention.height != c.height)

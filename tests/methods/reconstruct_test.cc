@@ -386,6 +386,29 @@ TEST(ReconstructTest, EveryStageReusesOnlyOutputsMadeWithItsSettings) {
   EXPECT_EQ(read_json_file(tmp / "tophat/model/run.json").at("options").at("seed"), 3);
 }
 
+// The silent-LED warning end to end, through the binary: the regression fixture's lens drops cover
+// 41.5% of its training views; a threshold no attention reaches makes the LED mask nothing, which
+// `reconstruct` prints and results.json keeps in method_info.warnings.
+TEST(ReconstructTest, ASilentLedIsPrintedAndRecorded) {
+  TempDir tmp;
+  const std::string fixture = std::string(WEATHERGS_SOURCE_DIR) + "/tests/data/regression/station_rain";
+  const std::string log = tmp / "r.log";
+  // Without --quiet: the warning is a stage line on stderr.
+  const int st = std::system((std::string(WEATHERGS_BINARY) + " reconstruct --data " + fixture +
+                              " --method weathergs-no-aef --led-threshold 0.9999 --iterations 10 --no-lpips --out " +
+                              (tmp / "run") + " > '" + log + "' 2>&1")
+                                 .c_str());
+  ASSERT_EQ(WIFEXITED(st) ? WEXITSTATUS(st) : -1, 0) << read_file(log);
+  const std::string printed = read_file(log);
+  const size_t at = printed.find("reconstruct: warning: the LED masked 0.0000% of the pixels");
+  ASSERT_NE(at, std::string::npos) << printed;
+  const evaluator::Results res = evaluator::read_results(tmp / "run/results.json");
+  ASSERT_TRUE(res.method_info.contains("warnings")) << res.method_info.dump();
+  const std::string recorded = res.method_info.at("warnings").at(0).get<std::string>();
+  EXPECT_EQ(printed.substr(at + std::string("reconstruct: warning: ").size(), recorded.size()), recorded);
+  EXPECT_NE(recorded.find("41.5%"), std::string::npos) << recorded;
+}
+
 TEST(ReconstructTest, NerfOptionsFileUnderTheGivenFlag) {
   TempDir tmp;
   const std::string data = weathered_dataset(tmp), file = tmp / "nerf.json";

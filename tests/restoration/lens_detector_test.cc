@@ -393,10 +393,14 @@ using testing_util::run_cli;
 
 // A dataset whose images/ carry the toy drops (the same on every view) and masks/lens/ their masks.
 // A LED that masks nothing where drops cover a tenth of the views says so; one that masks a real
-// share of them, or a detect.json without ground truth, does not.
+// share of them, or a record without ground truth, does not.
 TEST(DetectDatasetTest, SilentLedWarnsOnlyWhereDropsAreAndMasksAreNot) {
   auto report = [](double truth, double masked) {
-    return Json{{"ground_truth", {{"gt_fraction", truth}, {"mask_fraction", masked}}}};
+    DetectRecord r;
+    r.ground_truth = LedScore{};
+    r.ground_truth->gt_fraction = truth;
+    r.ground_truth->mask_fraction = masked;
+    return r;
   };
   const std::string w = silent_led_warning(report(0.12, 0.0));
   EXPECT_NE(w.find("12.0%"), std::string::npos) << w;
@@ -404,8 +408,7 @@ TEST(DetectDatasetTest, SilentLedWarnsOnlyWhereDropsAreAndMasksAreNot) {
   EXPECT_FALSE(silent_led_warning(report(0.12, 0.0011)).empty());  // under a hundredth of 12%
   EXPECT_TRUE(silent_led_warning(report(0.12, 0.0013)).empty());
   EXPECT_TRUE(silent_led_warning(report(0.09, 0.0)).empty());  // drops on under a tenth
-  EXPECT_TRUE(silent_led_warning(Json{{"ground_truth", nullptr}}).empty());
-  EXPECT_TRUE(silent_led_warning(Json::object()).empty());
+  EXPECT_TRUE(silent_led_warning(DetectRecord{}).empty());  // a dataset without masks/lens
 }
 
 void make_drop_dataset(const std::string& dir, int views, uint64_t seed) {
@@ -456,6 +459,15 @@ TEST(DetectDatasetTest, TrainLedThenDetectWritesEveryMaskWithAReport) {
   EXPECT_EQ(r.at("ground_truth").at("views"), ds.split("train").size());
   EXPECT_GT(r.at("ground_truth").at("iou").get<double>(), 0.5);
   EXPECT_EQ(r.at("dilate_iterations").get<int>(), dilations);  // the weights' count by default
+  {  // What methods/ reads of it (read_detect_record) is what detect wrote.
+    const DetectRecord rec = read_detect_record(tmp / "m");
+    ASSERT_TRUE(rec.ground_truth);
+    EXPECT_EQ(rec.ground_truth->iou, r.at("ground_truth").at("iou").get<double>());
+    EXPECT_EQ(rec.ground_truth->gt_fraction, r.at("ground_truth").at("gt_fraction").get<double>());
+    EXPECT_EQ(rec.ground_truth->mask_fraction, r.at("ground_truth").at("mask_fraction").get<double>());
+    EXPECT_EQ(rec.seconds, r.at("seconds").get<double>());
+    EXPECT_EQ(rec.weights_sha256, r.at("weights_sha256").get<std::string>());
+  }
   // --dilate overrides it, the band preset takes the released code's 3; --save-attention writes the
   // soft map each mask came from (16-bit).
   ASSERT_EQ(run_cli("detect --data " + (tmp / "held") + " --weights " + (tmp / "w") + " --out " + (tmp / "d5") +
