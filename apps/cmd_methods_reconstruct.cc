@@ -1,6 +1,7 @@
 // `weathergs reconstruct`: one method on one dataset, end to end (methods/reconstruct.h, docs/methods.md).
 #include <cstdio>
 #include <memory>
+#include <set>
 
 #include "apps/command.h"
 #include "apps/evaluator_flags.h"
@@ -13,6 +14,7 @@
 #include "methods/reconstruct.h"
 #include "nerf/trainer.h"
 #include "reconstruction/run.h"
+#include "reconstruction/unread_settings.h"
 
 namespace weathergs::cli {
 namespace {
@@ -24,12 +26,80 @@ struct ReconstructArgs {
   std::string led_weights, aef_weights;
   double led_threshold = 0;
   std::string nerf_options_file;
+  std::set<std::string> nerf_file_keys;  // the keys the --nerf-options file sets
   CLI::Option* nerf_iterations_flag = nullptr;
   bool led_adapt = false;
   int led_adapt_layouts = 0, led_adapt_iterations = 0;  // 0: LedAdaptOptions' defaults
   TrainFlags train;
   ScoringFlags scoring;
+  CLI::App* app = nullptr;
 };
+
+// The 3DGS trainer's flags, which a radiance-field method never reads.
+constexpr const char* k3dgsFlags[] = {"--train-options", "--downsample-start", "--full-resolution-at",
+                                      "--background", "--max-gaussians", "--random-init", "--random-init-count",
+                                      "--mask-normalization", "--large-prune", "--large-prune-from",
+                                      "--distractor-opacity-weight", "--checkpoint-every"};
+// Keys a 3DGS method's recipe sets (methods::method_train_options): --train-options may not set them.
+constexpr const char* kRecipeKeys[] = {"robust", "distractors_per_view", "in_the_wild"};
+
+// A flag or an options key the run would never read is refused before any work, naming it
+// (docs/methods.md, "Options that cannot take effect"): a run must be what its record says. `o` has
+// the run's length resolved.
+void refuse_unread(const ReconstructArgs& a, const methods::ReconstructOptions& o, const Dataset& ds) {
+  const methods::Recipe& r = methods::spec(o.method).recipe;
+  const std::string method = std::string("method ") + methods::to_string(o.method);
+  auto refuse_if = [&](bool unread, const char* flag, const std::string& why) {
+    if (unread && a.app->count(flag) > 0) throw InputError(flag, why);
+  };
+  const bool nerf = r.backend == methods::BackendKind::kNerf;
+  for (const char* flag : k3dgsFlags)
+    refuse_if(nerf, flag, "a 3DGS trainer option, and " + method + " trains a radiance field (--nerf-options)");
+  for (const char* flag : {"--iterations", "--schedule"})
+    refuse_if(nerf && o.eval_at.empty(), flag,
+              "the 3DGS run's length, which a radiance-field method reads only as the unit of --eval-at (" + method +
+                  " trains --nerf-iterations)");
+  for (const char* flag : {"--nerf-iterations", "--nerf-options"})
+    refuse_if(!nerf, flag, "a radiance-field option, and " + method + " trains 3DGS");
+  for (const char* flag : {"--led-weights", "--led-threshold", "--led-adapt"})
+    refuse_if(!r.lens_detector, flag, method + " runs no Lens Effect Detector");
+  refuse_if(a.led_threshold <= 0, "--led-threshold",
+            "0 would mask every pixel; a threshold is in (0, 1] (left out: the weights' calibrated rule)");
+  refuse_if(r.led_per_view, "--led-adapt", method + " uses the LED's per-view maps, which are never adapted (drops that move)");
+  refuse_if(!r.needs_aef_weights(), "--aef-weights", method + " runs no learned AEF");
+  refuse_if(a.no_triangulate, "--colmap", "--no-triangulate never runs COLMAP");
+  refuse_if(methods::dataset_has_points(ds, o.method), "--colmap",
+            "the dataset holds the SfM points " + method + " starts from: COLMAP never runs");
+  refuse_if(a.scoring.no_lpips, "--lpips-model", "--no-lpips skips LPIPS");
+  refuse_if(o.checkpoint_every >= o.train.iterations, "--checkpoint-every",
+            std::to_string(o.checkpoint_every) + " is not below the run's " + std::to_string(o.train.iterations) +
+                " iterations: no checkpoint would come before the end (0: only at the end)");
+  if (nerf) {
+    const nerf::NerfOptions& n = o.nerf;
+    if (a.nerf_options_file.empty()) return;
+    const std::string file = a.nerf_options_file;
+    if (a.nerf_file_keys.count("seed"))
+      throw InputError(file + ":/seed", "the radiance field's seed is the run's --seed");
+    for (int at : n.upsample_at)
+      if (a.nerf_file_keys.count("upsample_at") && at >= n.iterations)
+        throw InputError(file + ":/upsample_at", "holds " + std::to_string(at) + ", not below the run's " +
+                                                     std::to_string(n.iterations) + " iterations: that level would never train");
+    if (a.nerf_file_keys.count("tv_fraction") && n.tv_density == 0 && n.tv_color == 0)
+      throw InputError(file + ":/tv_fraction", "the total variation is off (tv_density and tv_color 0): nothing reads it");
+    return;
+  }
+  for (const char* key : kRecipeKeys)
+    if (a.train.has_file_key(key))
+      throw InputError(a.train.where(key), std::string(key) + " is what --method sets (" + method + ")");
+  reconstruction::RunContext context;
+  context.loss_mask = r.masks != reconstruction::TrainMasks::kNone || r.lens_detector || r.robust;
+  // Without the dataset's points, COLMAP may find none, and the random initialization then runs.
+  context.from_points = methods::dataset_has_points(ds, o.method);
+  const reconstruction::TrainOptions t = methods::method_train_options(o);
+  t.validate("--method " + std::string(methods::to_string(o.method)));
+  if (const auto u = reconstruction::unread_setting(t, context, [&](const std::string& k) { return a.train.is_set(k); }))
+    throw InputError(a.train.where(u->key), u->key + " is set, but " + u->why);
+}
 
 int run(ReconstructArgs& a) {
   methods::ReconstructOptions o = a.options;
@@ -39,12 +109,16 @@ int run(ReconstructArgs& a) {
   a.train.apply(o.train);
   if (!a.nerf_options_file.empty()) {
     const int iterations = o.nerf.iterations;
-    o.nerf = nerf::NerfOptions::from_user_json(JsonReader::from_file(a.nerf_options_file));
+    const JsonReader file = JsonReader::from_file(a.nerf_options_file);
+    o.nerf = nerf::NerfOptions::from_user_json(file);
+    for (const auto& [key, value] : file.value().items()) a.nerf_file_keys.insert(key);
     if (a.nerf_iterations_flag->count() > 0) o.nerf.iterations = iterations;
     o.nerf.validate("--nerf-options " + a.nerf_options_file);
   }
   // The run's length is known before it starts (the progress bar's total); reconstruct() resolves the same.
-  if (!o.dataset.empty()) o.train = reconstruction::run_length_for(o.train, read_dataset(o.dataset));
+  const Dataset dataset = read_dataset(o.dataset);
+  o.train = reconstruction::run_length_for(o.train, dataset);
+  refuse_unread(a, o, dataset);
   const methods::Recipe& recipe = methods::spec(o.method).recipe;
   if (recipe.needs_led_weights()) o.led_weights = find_led_weights(a.led_weights);
   if (recipe.needs_aef_weights()) o.aef_weights = find_aef_weights(a.aef_weights);
@@ -98,6 +172,7 @@ Command make(CLI::App& root) {
       "reconstruct",
       "Run one method on one dataset end to end: SfM points if missing, training, test renders, evaluation "
       "(RUN/results.json). A stopped run resumes when started again.");
+  a->app = sub;
   sub->add_option("--data", a->options.dataset, "Dataset folder")->required();
   sub->add_option("--method", a->method, "Method: " + methods)->capture_default_str();
   sub->add_option("--out", a->options.out, "Run folder")->required();

@@ -6,6 +6,7 @@
 #include "core/dataset.h"
 #include "core/progress.h"
 #include "reconstruction/run.h"
+#include "reconstruction/unread_settings.h"
 
 namespace weathergs::cli {
 namespace {
@@ -16,6 +17,26 @@ struct TrainArgs {
   TrainFlags train;
   CLI::App* app = nullptr;
 };
+
+// A value the run would never read is refused before any work, naming where it was set
+// (docs/reconstruction.md, "Options that cannot take effect").
+void refuse_unread(const TrainArgs& args, const reconstruction::TrainRunOptions& o, const Dataset& dataset) {
+  auto given = [&](const char* flag) { return args.app->count(flag) > 0; };
+  if (o.resume && given("--force"))
+    throw InputError("--force", "starts a run over, and --resume continues the one in --out: give one of them");
+  if (!o.inputs.images_dir.empty() && given("--images"))
+    throw InputError("--images", "--images-dir replaces the dataset's images: give one source of images");
+  if (given("--checkpoint-every") && o.checkpoint_every >= o.train.iterations)
+    throw InputError("--checkpoint-every", std::to_string(o.checkpoint_every) + " is not below the run's " +
+                                               std::to_string(o.train.iterations) +
+                                               " iterations: no checkpoint would come before the end (0: only at the end)");
+  reconstruction::RunContext context;
+  context.loss_mask = o.inputs.masks != reconstruction::TrainMasks::kNone || !o.inputs.masks_dir.empty() ||
+                      o.train.robust != reconstruction::TrainOptions::Robust::kNone;
+  context.from_points = reconstruction::starts_from_points(dataset, o.inputs);
+  if (const auto u = reconstruction::unread_setting(o.train, context, [&](const std::string& k) { return args.train.is_set(k); }))
+    throw InputError(args.train.where(u->key), u->key + " is set, but " + u->why);
+}
 
 int run_train(TrainArgs& args) {
   reconstruction::TrainRunOptions o = args.run;
@@ -50,7 +71,9 @@ int run_train(TrainArgs& args) {
   } else if (o.dataset.empty()) {
     throw InputError("--data", "required (unless --resume)");
   }
-  o.train = reconstruction::run_length_for(o.train, read_dataset(o.dataset));
+  const Dataset dataset = read_dataset(o.dataset);
+  o.train = reconstruction::run_length_for(o.train, dataset);
+  refuse_unread(args, o, dataset);
   ProgressBar bar("train", o.train.iterations);
   double psnr_ema = 0;
   int reported = 0;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <utility>
@@ -22,6 +23,7 @@ struct TrainFlags {
 
   // Binds the numeric flags to `train` and `checkpoint_every`; the named choices go through apply().
   void add_to(CLI::App* app, TrainOptions& train, int& checkpoint_every) {
+    app_ = app;
     app->add_option("--train-options", options_file,
                     "TrainOptions as JSON, the keys of run.json's \"options\" (docs/reconstruction.md): a key it "
                     "leaves out keeps its default, and flags given on the command line override it")
@@ -88,7 +90,7 @@ struct TrainFlags {
   }
 
   // After parsing: the options file under the flags given, then the named choices and the background.
-  void apply(TrainOptions& train) const {
+  void apply(TrainOptions& train) {
     TrainOptions parsed = train;
     parsed.random_init = random_init == "frustum" ? TrainOptions::RandomInit::kFrustum : TrainOptions::RandomInit::kPhotoConsistent;
     parsed.mask_normalization =
@@ -103,12 +105,36 @@ struct TrainFlags {
       train = parsed;
       return;
     }
-    train = TrainOptions::from_user_json(JsonReader::from_file(options_file));
+    const JsonReader file = JsonReader::from_file(options_file);
+    train = TrainOptions::from_user_json(file);
+    file_keys_.clear();
+    for (const auto& [key, value] : file.value().items()) file_keys_.push_back(key);
     for (const auto& [option, copy] : copies_)
       if (option->count() > 0) copy(parsed, train);
   }
 
+  // Whether the user set TrainOptions' `key`: its flag (--key with '-' for '_') given on the command
+  // line, or the --train-options file holding it. What reconstruction/unread_settings.h judges.
+  bool is_set(const std::string& key) const { return flag_given(key) || has_file_key(key); }
+  // Where the user set `key`, for a message: the flag, else "FILE:/key".
+  std::string where(const std::string& key) const { return flag_given(key) ? flag_of(key) : options_file + ":/" + key; }
+  bool has_file_key(const std::string& key) const {
+    return std::find(file_keys_.begin(), file_keys_.end(), key) != file_keys_.end();
+  }
+
  private:
+  CLI::App* app_ = nullptr;
+  std::vector<std::string> file_keys_;  // the keys of the --train-options file
+
+  static std::string flag_of(const std::string& key) {
+    std::string flag = "--" + key;
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    return flag;
+  }
+  bool flag_given(const std::string& key) const {
+    const CLI::Option* o = app_ ? app_->get_option_no_throw(flag_of(key)) : nullptr;
+    return o && o->count() > 0;
+  }
   // Each flag that sets a TrainOptions field, with the copy of that field a given flag makes.
   std::vector<std::pair<CLI::Option*, std::function<void(const TrainOptions&, TrainOptions&)>>> copies_;
 

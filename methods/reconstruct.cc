@@ -112,7 +112,7 @@ Points triangulate_into_run(const Run& run, const fs::path& local) {
 Points points_stage(const Run& run) {
   const char* model = run.recipe().clean_points ? layout::kSparseCleanModelDir : layout::kSparseModelDir;
   const std::string dataset_points = run.ds.file(model);
-  if (capture::has_sfm_points(dataset_points))
+  if (dataset_has_points(run.ds, run.o.method))
     return {dataset_points, "dataset " + fs::relative(dataset_points, run.ds.root).string()};
   if (run.o.points != PointsPolicy::kAuto) return {"", "random (the dataset has no SfM points)"};
   const fs::path local = run.dir / model;
@@ -177,11 +177,7 @@ std::unique_ptr<Backend> make_backend(const Run& run, const Points& points) {
     n.seed = run.o.train.seed;
     return make_nerf_backend(std::move(b), n);
   }
-  reconstruction::TrainOptions t = run.o.train;
-  if (r.robust) t.robust = reconstruction::TrainOptions::Robust::kRobustFilter;
-  t.distractors_per_view = r.distractors_per_view;
-  t.in_the_wild = r.in_the_wild;
-  return make_3dgs_backend(std::move(b), t, run.o.checkpoint_every);
+  return make_3dgs_backend(std::move(b), method_train_options(run.o), run.o.checkpoint_every);
 }
 
 // 4. Training, resumed when an earlier run of the same options stopped part way; a complete model
@@ -280,7 +276,32 @@ void curve_stage(const Run& run, Backend& backend, const evaluator::Results& fin
   write_file_atomic((run.dir / kCurveFile).string(), curve.dump(2) + "\n");
 }
 
+// What can be judged once the run's length is resolved, before any stage: an --eval-at iteration
+// past the end would never be scored, and a 3DGS method's recipe may rule out a trainer option.
+void check_resolved(const ReconstructOptions& o) {
+  for (int it : o.eval_at)
+    if (it > o.train.iterations)
+      throw InputError("--eval-at", std::to_string(it) + " is past the run's " + std::to_string(o.train.iterations) +
+                                        " iterations: it would never be scored (the final model always is)");
+  if (spec(o.method).recipe.backend == BackendKind::k3dgs)
+    method_train_options(o).validate(std::string("--method ") + to_string(o.method));
+}
+
 }  // namespace
+
+reconstruction::TrainOptions method_train_options(const ReconstructOptions& o) {
+  const Recipe& r = spec(o.method).recipe;
+  reconstruction::TrainOptions t = o.train;
+  if (r.robust) t.robust = reconstruction::TrainOptions::Robust::kRobustFilter;
+  t.distractors_per_view = r.distractors_per_view;
+  t.in_the_wild = r.in_the_wild;
+  return t;
+}
+
+bool dataset_has_points(const Dataset& dataset, Method method) {
+  return capture::has_sfm_points(
+      dataset.file(spec(method).recipe.clean_points ? layout::kSparseCleanModelDir : layout::kSparseModelDir));
+}
 
 void ReconstructOptions::validate() const {
   if (dataset.empty()) throw InputError("reconstruct options", "dataset is empty: the dataset folder is required");
@@ -290,8 +311,9 @@ void ReconstructOptions::validate() const {
   for (int it : eval_at)
     if (it < 1) throw InputError("reconstruct options", "eval_at holds " + std::to_string(it) + ": iterations must be >= 1");
   for (double f : eval_fractions)
-    if (!(f > 0 && f < 1))
-      throw InputError("reconstruct options", "eval_fractions holds " + std::to_string(f) + ": each must be in (0, 1)");
+    if (!(f > 0 && f <= 1))
+      throw InputError("reconstruct options",
+                       "eval_fractions (--eval-at-fractions) holds " + std::to_string(f) + ": each must be in (0, 1]");
   colmap.validate();
   led_mask.validate();
   if (led_adapt) led_adapt->validate();
@@ -313,6 +335,7 @@ ReconstructResult reconstruct(const ReconstructOptions& given, const reconstruct
   // The run's length and budget for this dataset: snapshots, records and staleness all use them.
   ReconstructOptions o = given;
   o.train = reconstruction::run_length_for(given.train, ds);
+  check_resolved(o);
   for (double f : given.eval_fractions) o.eval_at.push_back(std::max(1, int(f * o.train.iterations)));
   open_run_folder(o);
   const Run run{o, spec(o.method), ds, fs::path(o.out), on_stage};

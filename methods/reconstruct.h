@@ -51,10 +51,11 @@ struct ReconstructOptions {
   int checkpoint_every = 1000;
   // Iterations at which the test views are also scored (curve.json), in 3DGS iterations: each is the
   // fraction it / train.iterations of a run, which every backend scores at the same point of its own
-  // run (radiance field: it * nerf.iterations / train.iterations, rounded). Those >= train.iterations
-  // are ignored (the final model is always a point of the curve). Each must be >= 1.
+  // run (radiance field: it * nerf.iterations / train.iterations, rounded). Each must be >= 1 and at
+  // most the resolved train.iterations (InputError before any stage): the end is the final model,
+  // always a point of the curve.
   std::vector<int> eval_at;
-  // The same as fractions of the run's resolved length (each in (0, 1)): max(1, floor(f x length)),
+  // The same as fractions of the run's resolved length (each in (0, 1]): max(1, floor(f x length)),
   // for a run whose length the schedule sets (the workflow's curve_fractions).
   std::vector<double> eval_fractions;
   bool force = false;  // remove what an earlier run left at `out` and start over
@@ -82,6 +83,14 @@ struct ReconstructResult {
   bool resumed = false;
   double train_seconds = 0, render_seconds_per_view = 0, peak_rss_mb = 0;
 };
+
+// The 3DGS trainer's options of a 3DGS method's run: options.train with what the method's recipe sets
+// (the robust mask, distractor Gaussians, in the wild).
+reconstruction::TrainOptions method_train_options(const ReconstructOptions& options);
+
+// Whether the dataset holds the SfM points the method starts from (sparse/0; sparse_clean/0 for the
+// oracles), so that the run neither triangulates nor initializes at random.
+bool dataset_has_points(const Dataset& dataset, Method method);
 
 // Progress: the trainer's per-iteration callback, and one line per stage (may be empty).
 using StageCallback = std::function<void(const std::string& stage)>;

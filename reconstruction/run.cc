@@ -157,23 +157,35 @@ std::vector<float> render_depth(const GaussianSet<float>& g, const Camera& camer
   return depth;
 }
 
-GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& inputs, const TrainOptions& options,
-                                     const std::vector<TrainView>& train_views, std::string* source) {
+namespace {
+
+// The SfM points a run starts from: those of inputs.points_dir (which must hold a model), else of the
+// dataset's sparse/0; empty when there are none.
+std::vector<ColmapPoint3D> initial_points(const Dataset& dataset, const TrainInputs& inputs) {
   const bool given = !inputs.points_dir.empty();
   const std::string path =
       (fs::path(given ? inputs.points_dir : dataset.file(layout::kSparseModelDir)) / "points3D.txt").string();
   if (given && !fs::exists(path)) throw InputError(path, "missing: points_dir must hold a COLMAP text model");
-  if (fs::exists(path)) {
-    const std::vector<ColmapPoint3D> pts = read_colmap_points3d(path);
-    if (!pts.empty()) {
-      std::vector<Eigen::Vector3d> xyz, rgb;
-      for (const ColmapPoint3D& p : pts) {
-        xyz.push_back(p.xyz);
-        rgb.push_back(p.rgb / 255.0);
-      }
-      *source = "colmap:" + std::to_string(pts.size());
-      return init_from_points(xyz, rgb);
+  return fs::exists(path) ? read_colmap_points3d(path) : std::vector<ColmapPoint3D>{};
+}
+
+}  // namespace
+
+bool starts_from_points(const Dataset& dataset, const TrainInputs& inputs) {
+  return !initial_points(dataset, inputs).empty();
+}
+
+GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& inputs, const TrainOptions& options,
+                                     const std::vector<TrainView>& train_views, std::string* source) {
+  const std::vector<ColmapPoint3D> pts = initial_points(dataset, inputs);
+  if (!pts.empty()) {
+    std::vector<Eigen::Vector3d> xyz, rgb;
+    for (const ColmapPoint3D& p : pts) {
+      xyz.push_back(p.xyz);
+      rgb.push_back(p.rgb / 255.0);
     }
+    *source = "colmap:" + std::to_string(pts.size());
+    return init_from_points(xyz, rgb);
   }
   *source = "random:" + std::to_string(options.random_init_count);
   return init_random(train_views, options);

@@ -57,6 +57,8 @@ struct TrainRunOptions {
 // dataset's sparse/0 when present and non-empty, else random (init_random.h).
 GaussianSet<float> initial_gaussians(const Dataset& dataset, const TrainInputs& inputs, const TrainOptions& options,
                                      const std::vector<TrainView>& train_views, std::string* source);
+// Whether initial_gaussians starts from SfM points (so that the random initialization never runs).
+bool starts_from_points(const Dataset& dataset, const TrainInputs& inputs);
 
 struct TrainRunResult {
   int iterations = 0;

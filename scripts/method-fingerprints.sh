@@ -18,8 +18,12 @@ mkdir -p "$OUT"
 methods="3dgs oracle gt-masks aef-tophat weathergs weathergs-no-aef weathergs-no-led robust-3dgs desplat gs-w-lite nerf derainnerf weathergs-nerf nerf-oracle"
 run() {  # NAME METHOD EXTRA...
   local name=$1 method=$2; shift 2
-  "$BIN" --quiet reconstruct --data "$DATA" --method "$method" --iterations "$ITER" --nerf-iterations "$ITER" \
-    --eval-at $((ITER / 2)) --checkpoint-every $((ITER / 3)) --seed 0 --force --out "$OUT/$name" "$@" > "$OUT/$name.log" 2>&1 ||
+  # Each backend gets the flags it reads (reconstruct refuses the others); --iterations is also the
+  # unit of a radiance field's --eval-at.
+  local backend=(--checkpoint-every $((ITER / 3)))
+  case "$method" in *nerf*) backend=(--nerf-iterations "$ITER") ;; esac
+  "$BIN" --quiet reconstruct --data "$DATA" --method "$method" --iterations "$ITER" "${backend[@]}" \
+    --eval-at $((ITER / 2)) --seed 0 --force --out "$OUT/$name" "$@" > "$OUT/$name.log" 2>&1 ||
     { echo "$name failed:"; tail -5 "$OUT/$name.log"; exit 1; }
 }
 for m in $methods; do run "$m" "$m" --no-triangulate; done

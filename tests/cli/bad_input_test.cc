@@ -15,6 +15,7 @@
 #include <limits>
 
 #include "core/atomic_file.h"
+#include "core/colmap_model.h"
 #include "core/dataset.h"
 #include "core/image.h"
 #include "core/json_reader.h"
@@ -79,6 +80,117 @@ Json results_json() {
     "split": "test", "mask": null}, "metrics": {"psnr": 20.0, "ssim": 0.5, "lpips": null},
     "per_view": {"000": {"psnr": 20.0, "ssim": 0.5, "lpips": null}}, "method_info": {},
     "sha256": {"renders": "x", "ground_truth": "y"}})");
+}
+
+// A copy of the valid dataset at $T/pts with SfM points in sparse/0: runs on it start from them.
+void with_points(const std::string& tmp) {
+  if (fs::exists(tmp + "/pts")) return;
+  copy_tree(tmp + "/data", tmp + "/pts");
+  ColmapModel m = colmap_model_from_cameras(read_dataset(tmp + "/pts").cameras);
+  for (int i = 0; i < 20; ++i) {
+    ColmapPoint3D p;
+    p.id = i + 1;
+    p.xyz = Eigen::Vector3d(0.2 * i - 2, 8, 0.1 * i);
+    p.rgb = Eigen::Vector3d(120, 100, 80);
+    p.track = {{1, 0}, {2, 0}};
+    m.points.push_back(p);
+  }
+  fs::create_directories(tmp + "/pts/sparse/0");
+  write_colmap_text(tmp + "/pts/sparse/0", m);
+}
+
+// The option values a run could not use: refused before any work, naming the flag or the key
+// (docs/methods.md and docs/reconstruction.md, "Options that cannot take effect").
+void unread_options(std::vector<Case>& c) {
+  auto json = [](const std::string& name, const std::string& body) {
+    return [name, body](const std::string& t) { text(t + "/" + name, body); };
+  };
+  const std::string scenes = std::string(WEATHERGS_SOURCE_DIR) + "/scenes";
+  const std::string tr = "train --data $D --iterations 20 ";
+  c.push_back({"unread: train --full-resolution-at at full resolution", {}, tr + "--full-resolution-at 0.3 --out $T/unread",
+               "--full-resolution-at", "unread"});
+  c.push_back({"unread: train --distractor-opacity-weight without distractors", {},
+               tr + "--distractor-opacity-weight 0.5 --out $T/unread", "--distractor-opacity-weight", "unread"});
+  c.push_back({"unread: train --mask-normalization without masks", {}, tr + "--mask-normalization reference --out $T/unread",
+               "--mask-normalization", "unread"});
+  c.push_back({"unread: train --random-init from SfM points", with_points,
+               "train --data $T/pts --iterations 20 --random-init frustum --out $T/unread", "--random-init", "unread"});
+  c.push_back({"unread: train --train-options random_init_count from SfM points",
+               [json](const std::string& t) { with_points(t), json("o.json", R"({"random_init_count": 100})")(t); },
+               "train --data $T/pts --iterations 20 --train-options $T/o.json --out $T/unread", "o.json:/random_init_count", "unread"});
+  c.push_back({"unread: train --large-prune-from after the last densification", {},
+               tr + "--large-prune-from 5000 --out $T/unread", "--large-prune-from", "unread"});
+  c.push_back({"unread: train --large-prune without a densification step after the prune's start", {},
+               tr + "--large-prune camera_extent --large-prune-from 19 --out $T/unread", "--large-prune", "unread"});
+  c.push_back({"unread: train densify_from past the run", json("o.json", R"({"densify_from": 900})"),
+               tr + "--train-options $T/o.json --out $T/unread", "densify_from", "unread"});
+  c.push_back({"unread: train max_screen_size_px (inert)", json("o.json", R"({"max_screen_size_px": 10})"),
+               tr + "--train-options $T/o.json --out $T/unread", "max_screen_size_px", "unread"});
+  c.push_back({"unread: train visibility_weight without --in-the-wild", json("o.json", R"({"visibility_weight": 0.5})"),
+               tr + "--train-options $T/o.json --out $T/unread", "visibility_weight", "unread"});
+  c.push_back({"unread: train in_the_wild_from past the run", json("o.json", R"({"in_the_wild_from": 500})"),
+               tr + "--in-the-wild --train-options $T/o.json --out $T/unread", "in_the_wild_from", "unread"});
+  c.push_back({"unread: train blend_prune_threshold without blend_prune_at", json("o.json", R"({"blend_prune_threshold": 0.02})"),
+               tr + "--train-options $T/o.json --out $T/unread", "blend_prune_threshold", "unread"});
+  c.push_back({"unread: train blend_prune_at past the run", json("o.json", R"({"blend_prune_at": [10, 50]})"),
+               tr + "--train-options $T/o.json --out $T/unread", "blend_prune_at", "unread"});
+  c.push_back({"unread: train position_lr_hold_until past the run", json("o.json", R"({"position_lr_hold_until": 50})"),
+               tr + "--train-options $T/o.json --out $T/unread", "position_lr_hold_until", "unread"});
+  c.push_back({"unread: train --checkpoint-every not below the run", {}, tr + "--checkpoint-every 20 --out $T/unread",
+               "--checkpoint-every", "unread"});
+  c.push_back({"unread: train --images beside --images-dir", {}, tr + "--images clean --images-dir $D/clean --out $T/unread",
+               "--images-dir replaces", "unread"});
+  c.push_back({"unread: train --force beside --resume", {}, "train --resume --force --out $T/run", "--force", ""});
+  const std::string rc = "reconstruct --data $D --no-lpips --no-triangulate --out $T/unread --method ";
+  c.push_back({"unread: reconstruct --eval-at past the run", {}, rc + "3dgs --iterations 50 --eval-at 25,60", "--eval-at", "unread"});
+  c.push_back({"unread: reconstruct --eval-at-fractions outside (0, 1]", {}, rc + "3dgs --eval-at-fractions 0.5,1.5",
+               "--eval-at-fractions", "unread"});
+  c.push_back({"unread: reconstruct --checkpoint-every not below the run", {}, rc + "3dgs --iterations 50 --checkpoint-every 60",
+               "--checkpoint-every", "unread"});
+  c.push_back({"unread: reconstruct --nerf-iterations on 3DGS", {}, rc + "3dgs --nerf-iterations 100", "--nerf-iterations", "unread"});
+  c.push_back({"unread: reconstruct --nerf-options on 3DGS", json("n.json", "{}"), rc + "oracle --nerf-options $T/n.json",
+               "--nerf-options", "unread"});
+  c.push_back({"unread: reconstruct a 3DGS flag on a radiance field", {}, rc + "nerf --max-gaussians 1000", "--max-gaussians", "unread"});
+  c.push_back({"unread: reconstruct --checkpoint-every on a radiance field", {}, rc + "nerf --checkpoint-every 10",
+               "--checkpoint-every", "unread"});
+  c.push_back({"unread: reconstruct --iterations on a radiance field without --eval-at", {}, rc + "nerf --iterations 100",
+               "--iterations", "unread"});
+  c.push_back({"unread: reconstruct --led-weights without the LED", {}, rc + "3dgs --led-weights $T/led", "--led-weights", "unread"});
+  c.push_back({"unread: reconstruct --led-threshold without the LED", {}, rc + "aef-tophat --led-threshold 0.5",
+               "--led-threshold", "unread"});
+  c.push_back({"unread: reconstruct --led-threshold 0", {}, rc + "weathergs-no-aef --led-threshold 0", "--led-threshold", "unread"});
+  c.push_back({"unread: reconstruct --led-adapt on per-view maps", {}, rc + "derainnerf --led-adapt", "--led-adapt", "unread"});
+  c.push_back({"unread: reconstruct --aef-weights without the learned AEF", {}, rc + "aef-tophat --aef-weights $T/aef",
+               "--aef-weights", "unread"});
+  c.push_back({"unread: reconstruct --colmap with --no-triangulate", {}, rc + "3dgs --colmap /bin/true", "--colmap", "unread"});
+  c.push_back({"unread: reconstruct --colmap with the dataset's points", with_points,
+               "reconstruct --data $T/pts --no-lpips --out $T/unread --method 3dgs --colmap /bin/true", "--colmap", "unread"});
+  c.push_back({"unread: reconstruct --random-init with the dataset's points", with_points,
+               "reconstruct --data $T/pts --no-lpips --out $T/unread --method 3dgs --random-init frustum", "--random-init", "unread"});
+  c.push_back({"unread: reconstruct --lpips-model with --no-lpips", {}, rc + "3dgs --lpips-model $T/lpips", "--lpips-model", "unread"});
+  c.push_back({"unread: reconstruct --mask-normalization without loss masks", {}, rc + "3dgs --mask-normalization reference",
+               "--mask-normalization", "unread"});
+  c.push_back({"unread: reconstruct --distractor-opacity-weight off desplat", {}, rc + "3dgs --distractor-opacity-weight 0.5",
+               "--distractor-opacity-weight", "unread"});
+  c.push_back({"unread: reconstruct --downsample-start on gs-w-lite", {}, rc + "gs-w-lite --downsample-start 2",
+               "downsample_start", "unread"});
+  c.push_back({"unread: reconstruct a recipe's key in --train-options", json("o.json", R"({"in_the_wild": true})"),
+               rc + "3dgs --train-options $T/o.json", "o.json:/in_the_wild", "unread"});
+  c.push_back({"unread: reconstruct seed in --nerf-options", json("n.json", R"({"seed": 3})"), rc + "nerf --nerf-options $T/n.json",
+               "n.json:/seed", "unread"});
+  c.push_back({"unread: reconstruct upsample_at past the run in --nerf-options",
+               json("n.json", R"({"iterations": 80, "level_scales": [0.5, 1.0], "upsample_at": [100]})"),
+               rc + "nerf --nerf-options $T/n.json", "n.json:/upsample_at", "unread"});
+  c.push_back({"unread: reconstruct tv_fraction with TV off in --nerf-options",
+               json("n.json", R"({"tv_density": 0, "tv_color": 0, "tv_fraction": 0.1})"), rc + "nerf --nerf-options $T/n.json",
+               "n.json:/tv_fraction", "unread"});
+  const std::string gen = "generate --scene " + scenes + "/pool.json --profile tiny --cache $T/c --out $T/g ";
+  c.push_back({"unread: generate --max-views not below the views", {}, gen + "--weather rain --max-views 5", "--max-views", "g"});
+  c.push_back({"unread: generate --seed on a clear variant", {}, gen + "--weather clear --seed 3", "--seed", "g"});
+  c.push_back({"unread: generate --targets on a clear variant", {}, gen + "--weather clear --targets", "--targets", "g"});
+  c.push_back({"unread: generate --colmap with --no-colmap", {}, gen + "--weather rain --no-colmap --colmap /bin/true",
+               "--colmap", "g"});
+  c.push_back({"unread: generate a negative --seed", {}, gen + "--weather rain --seed -4", "--seed", "g"});
 }
 
 std::vector<Case> corpus() {
@@ -380,6 +492,7 @@ std::vector<Case> corpus() {
                "reconstruct --data $D --method weathergs-no-aef --out $T/ledrun --led-adapt-layouts 1",
                "--led-adapt-layouts requires --led-adapt", "ledrun"});
   c.push_back({"detect: zero adaptation passes", {}, "detect --data $D --out $T/ledmasks --adapt --adapt-passes 0", "passes", "ledmasks"});
+  unread_options(c);
   return c;
 }
 

@@ -140,11 +140,16 @@ TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
   TempDir tmp;
   const std::string data = weathered_dataset(tmp);
   const std::string a = tmp / "a", b = tmp / "b";
-  // a also scores its test views at iterations 100 and 50 (a quarter of the run's 200; 500 is past
-  // the end: ignored).
+  // a also scores its test views at iterations 100 and 50 (a quarter of the run's 200). 500 is past
+  // the end, a fraction must be in (0, 1]: refused before any stage, nothing written.
   ReconstructOptions ao = options(data, a, Method::k3dgs);
   ao.eval_at = {100, 500};
-  ao.eval_fractions = {0.25};
+  EXPECT_THROW(reconstruct(ao), InputError);
+  ao.eval_at = {100};
+  ao.eval_fractions = {1.5};
+  EXPECT_THROW(reconstruct(ao), InputError);
+  EXPECT_FALSE(fs::exists(a));
+  ao.eval_fractions = {0.25, 1.0};  // 1: the end, which is always scored
   const ReconstructResult ar = reconstruct(ao);
   EXPECT_THROW(reconstruct(options(data, a, Method::k3dgs)), InputError);  // complete: needs force
   {  // curve.json: 50, 100 and the final 200, training seconds growing, the last point = results.json
@@ -378,7 +383,17 @@ TEST(ReconstructTest, EveryStageReusesOnlyOutputsMadeWithItsSettings) {
   fs::remove(tmp / "nerf/results.json");
   ReconstructOptions more = field;
   more.nerf.iterations = 90;
-  expect_refused(more, "radiance field", "iterations");
+  expect_refused(more, "radiance field", "options.iterations");
+  // Any other setting the field records: the seed (the run's), a TV weight, the images it trained on.
+  ReconstructOptions reseeded = field;
+  reseeded.train.seed = 3;
+  expect_refused(reseeded, "radiance field", "options.seed");
+  ReconstructOptions smoother = field;
+  smoother.nerf.tv_density = 3e-3;
+  expect_refused(smoother, "radiance field", "options.tv_density");
+  ReconstructOptions oracle = field;
+  oracle.method = Method::kNerfOracle;
+  expect_refused(oracle, "radiance field", "images");
   // --force starts over, whatever was there.
   other_seed.force = true;
   const std::vector<std::string> forced = stages_of(other_seed);

@@ -79,14 +79,14 @@ TEST(CliTest, TrainOptionsFileUnderTheGivenFlags) {
   const GaussianSet<float> truth = testing::random_gaussians<float>(60, 2, 1.0, 0.12, 0.0);
   testing::write_synthetic_dataset(dir / "data", truth, testing::ring_cameras(6, 32, 24, 30, 4.0), true);
   const std::string data = dir / "data", file = dir / "options.json";
-  write_file_atomic(file, R"({"iterations": 30, "densify_until": 20, "lambda_dssim": 0.5, "random_init": "frustum"})");
+  write_file_atomic(file, R"({"iterations": 30, "densify_until": 20, "lambda_dssim": 0.5, "max_gaussians": 5000})");
   // The file's keys, a flag given on the command line over it, the rest at their defaults.
   ASSERT_EQ(run("train --data " + data + " --train-options " + file + " --iterations 24 --out " + dir / "run"), 0);
   const JsonReader o = JsonReader::from_file(dir / "run" + "/run.json").child("options");
   EXPECT_EQ(o.get<int>("iterations"), 24);
   EXPECT_EQ(o.get<int>("densify_until"), 20);
   EXPECT_DOUBLE_EQ(o.get<double>("lambda_dssim"), 0.5);
-  EXPECT_EQ(o.get<std::string>("random_init"), "frustum");
+  EXPECT_EQ(o.get<int64_t>("max_gaussians"), 5000);
   EXPECT_EQ(o.get<int>("densify_from"), TrainOptions{}.densify_from);
   // Including the keys whose absence from a run record means the rule older runs trained with.
   EXPECT_EQ(o.get<std::string>("large_prune"), to_string(TrainOptions{}.large_prune));
@@ -96,7 +96,11 @@ TEST(CliTest, TrainOptionsFileUnderTheGivenFlags) {
   EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r2"), 2);
   write_file_atomic(file, R"({"iterations": -1})");
   EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r3"), 2);
+  // A key the run would never read: the dataset has SfM points, so no random initialization runs.
+  write_file_atomic(file, R"({"random_init": "frustum"})");
+  EXPECT_EQ(run("train --data " + data + " --train-options " + file + " --out " + dir / "r4"), 2);
   EXPECT_FALSE(fs::exists(dir / "r2"));
+  EXPECT_FALSE(fs::exists(dir / "r4"));
 }
 
 TEST(CliTest, MaskAndImageFolders) {
@@ -148,6 +152,51 @@ TEST(CliTest, MaskAndImageFolders) {
   EXPECT_EQ(run("train --data " + dir / "data" + " --masks-dir " + dir / "masks" + " --out " + dir / "r3"), 2);
   EXPECT_FALSE(fs::exists(dir / "r2"));
   EXPECT_FALSE(fs::exists(dir / "r3"));
+}
+
+// --schedule reference at a shorter --iterations is the protocol's schedule scaled to it
+// (docs/schedules.md): the same model, byte for byte, as --schedule unscaled with those counts typed
+// in by hand. Unscaled with the protocol's own counts (no densification before 500) is another model.
+TEST(CliTest, ReferenceScheduleIsTheUnscaledOneWithTheCountsScaledByHand) {
+  weathergs::testing::TempDir dir;
+  const GaussianSet<float> truth = testing::random_gaussians<float>(80, 6, 1.0, 0.12, 0.0);
+  testing::write_synthetic_dataset(dir / "data", truth, testing::ring_cameras(6, 32, 24, 30, 4.0), true);
+  const std::string data = dir / "data", file = dir / "scaled.json";
+  ASSERT_EQ(run("train --data " + data + " --schedule reference --iterations 300 --out " + dir / "reference"), 0);
+  // s = 300 / 30000: densify 5..150, every 18 (145 / 8 steps: the floor of 8), resets 30 steps apart,
+  // the SH degree every 10, the large-Gaussian prune from 30.
+  write_file_atomic(file, R"({"densify_from": 5, "densify_until": 150, "densification_interval": 18,
+      "opacity_reset_interval": 540, "sh_degree_interval": 10, "large_prune_from": 30})");
+  ASSERT_EQ(run("train --data " + data + " --schedule unscaled --iterations 300 --train-options " + file + " --out " +
+                dir / "hand"),
+            0);
+  ASSERT_EQ(run("train --data " + data + " --schedule unscaled --iterations 300 --out " + dir / "unscaled"), 0);
+  const std::string reference = read_file(dir / "reference/point_cloud.ply");
+  EXPECT_EQ(reference, read_file(dir / "hand/point_cloud.ply"));
+  EXPECT_EQ(read_json_file(dir / "reference/run.json").at("effective_schedule"),
+            read_json_file(dir / "hand/run.json").at("effective_schedule"));
+  EXPECT_NE(reference, read_file(dir / "unscaled/point_cloud.ply"));
+}
+
+// The resolution schedule through the binary: recorded in run.json, and it changes the model; its
+// share of the run without a start factor cannot take effect and is refused.
+TEST(CliTest, DownsampleStartThroughTheBinary) {
+  weathergs::testing::TempDir dir;
+  const GaussianSet<float> truth = testing::random_gaussians<float>(80, 7, 1.0, 0.12, 0.0);
+  testing::write_synthetic_dataset(dir / "data", truth, testing::ring_cameras(6, 32, 24, 30, 4.0), true);
+  const std::string data = dir / "data";
+  ASSERT_EQ(run("train --data " + data + " --iterations 40 --downsample-start 4 --full-resolution-at 0.8 --out " +
+                dir / "low"),
+            0);
+  const Json options = read_json_file(dir / "low/run.json").at("options");
+  EXPECT_EQ(options.at("downsample_start"), 4);
+  EXPECT_EQ(options.at("full_resolution_at"), 0.8);
+  ASSERT_EQ(run("train --data " + data + " --iterations 40 --out " + dir / "full"), 0);
+  EXPECT_EQ(read_json_file(dir / "full/run.json").at("options").at("downsample_start"), 1);
+  EXPECT_NE(read_file(dir / "low/point_cloud.ply"), read_file(dir / "full/point_cloud.ply"));
+  EXPECT_EQ(run("train --data " + data + " --iterations 40 --full-resolution-at 0.8 --out " + dir / "bad"), 2);
+  EXPECT_EQ(run("train --data " + data + " --iterations 40 --downsample-start 3 --out " + dir / "bad"), 2);
+  EXPECT_FALSE(fs::exists(dir / "bad"));
 }
 
 }  // namespace

@@ -208,6 +208,47 @@ TEST(ResolutionTest, DownsampledRunIsDeterministicAndResumes) {
   EXPECT_THROW(bad.validate("x"), InputError);
 }
 
+// The trainer itself (not only the operator above) renders a downsampled iteration at the downsampled
+// camera with the scaled low-pass: its first iteration's loss at factor 4 is, bit for bit, the loss of
+// that render against the box-downsampled view, and not the one with the full-resolution low-pass.
+TEST(ResolutionTest, TheTrainerRendersADownsampledIterationWithTheScaledLowPass) {
+  const GaussianSet<float> truth = random_gaussians<float>(120, 3, 1.0, 0.1, 0.0);
+  std::vector<TrainView> views;
+  for (const Camera& cam : testing::ring_cameras(4, 64, 48, 58.0, 4.0)) {
+    TrainView v;
+    v.camera = cam;
+    v.rgb = testing::render_image(truth, cam).data;
+    views.push_back(std::move(v));
+  }
+  std::vector<Camera> cams;
+  for (const TrainView& v : views) cams.push_back(v.camera);
+  // Small Gaussians (~1 px at full size): at 1/4 the low-pass is most of their footprint.
+  const GaussianSet<float> init = random_gaussians<float>(200, 4, 1.0, 0.01, 0.0);
+  TrainOptions o;
+  o.iterations = 40;
+  o.downsample_start = 4;
+  Trainer t(views, init, o, scene_extent(cams));
+  const IterationStats st = t.step();
+  ASSERT_EQ(st.downsample, 4);
+  const TrainView low = downsample_view(views[size_t(t.view_for_iteration(1))], 4);
+  auto loss_with = [&](double low_pass) {
+    RasterCamera<float> cam = RasterCamera<float>::from(low.camera);
+    cam.low_pass = float(low_pass);
+    RasterSettings<float> rs;
+    rs.sh_degree = t.sh_degree();
+    RasterState<float> state;
+    rasterize_forward(init, cam, rs, &state);
+    return double(photometric_loss<float>(state.image, low.rgb, nullptr, low.camera.width, low.camera.height,
+                                          float(kLambdaDssim), nullptr, MaskNormalization::kValid)
+                      .loss);
+  };
+  const double scaled = loss_with(kLowPass2d / 16), unscaled = loss_with(kLowPass2d);
+  std::printf("first iteration at 1/4: trainer loss %.6f, scaled low-pass %.6f, unscaled %.6f\n", st.loss, scaled,
+              unscaled);
+  EXPECT_EQ(st.loss, scaled);
+  EXPECT_GT(std::abs(unscaled - scaled), 1e-3) << "the test must tell the two low-passes apart";
+}
+
 // Why the low-pass scales with the factor: small Gaussians rendered at factor 4 with the full-resolution
 // pixel's footprint (0.3 / 16 px^2) carry the light of the box-downsampled full-resolution render; with
 // the reference's 0.3 px^2 each would cover 16 times the scene it covers at full size, so a model

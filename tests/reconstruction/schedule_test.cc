@@ -62,6 +62,72 @@ TEST(Schedule, ScaledToTheRunLengthReferenceAt30000) {
   EXPECT_EQ(o.effective().densify_until, 1500);
 }
 
+// --schedule reference at 30000 iterations is the protocol (graphdeco-inria gaussian-splatting:
+// arguments/__init__.py OptimizationParams, and train.py's SH step every 1000 iterations and
+// large-Gaussian prune from the first opacity reset), transcribed here independently of
+// TrainOptions' defaults: its effective counts are the protocol's, and it trains bit for bit as the
+// trainer given those counts by hand under `unscaled` (over a densification step and the first SH
+// step). Only the memory guard (max_gaussians) is ours.
+TEST(Schedule, ReferenceIsTheProtocolsTrainerBitForBit) {
+  TrainOptions hand;
+  hand.schedule = TrainOptions::Schedule::kUnscaled;
+  hand.iterations = 30000;
+  hand.position_lr_init = 0.00016;
+  hand.position_lr_final = 0.0000016;
+  hand.feature_lr = 0.0025;
+  hand.opacity_lr = 0.025;
+  hand.scaling_lr = 0.005;
+  hand.rotation_lr = 0.001;
+  hand.percent_dense = 0.01;
+  hand.lambda_dssim = 0.2;
+  hand.densification_interval = 100;
+  hand.opacity_reset_interval = 3000;
+  hand.densify_from = 500;
+  hand.densify_until = 15000;
+  hand.densify_grad_threshold = 0.0002;
+  hand.max_sh_degree = 3;
+  hand.sh_degree_interval = 1000;
+  hand.min_opacity = 0.005;
+  hand.max_world_size = 0.1;
+  hand.large_prune_from = 3000;
+  TrainOptions reference;
+  reference.schedule = TrainOptions::Schedule::kReference;
+  reference = reference.with_run_length(14, 300 * 200);
+  Json want = hand.effective().to_json(), got = reference.effective().to_json();
+  want.erase("schedule");
+  got.erase("schedule");
+  EXPECT_EQ(got.dump(), want.dump());
+  EXPECT_EQ(reference.max_gaussians, TrainOptions().max_gaussians);  // no budget: the memory guard only
+
+  std::vector<TrainView> views;
+  const GaussianSet<float> truth = testing::random_gaussians<float>(60, 8, 1.0, 0.15, 0.0);
+  for (const Camera& cam : testing::ring_cameras(4, 32, 24, 29.0, 4.0)) {
+    TrainView v;
+    v.camera = cam;
+    v.rgb = testing::render_image(truth, cam).data;
+    views.push_back(std::move(v));
+  }
+  std::vector<Camera> cams;
+  for (const TrainView& v : views) cams.push_back(v.camera);
+  const GaussianSet<float> init = testing::random_gaussians<float>(40, 9, 1.0, 0.1, 0.0);
+  Trainer a(views, init, reference, scene_extent(cams)), b(views, init, hand, scene_extent(cams));
+  bool densified = false;
+  for (int i = 1; i <= 1100; ++i) {
+    const IterationStats sa = a.step(), sb = b.step();
+    ASSERT_EQ(sa.loss, sb.loss) << "iteration " << i;
+    ASSERT_EQ(sa.densified, sb.densified) << "iteration " << i;
+    densified |= sa.densified;
+  }
+  EXPECT_TRUE(densified);
+  EXPECT_EQ(a.sh_degree(), 1);
+  EXPECT_EQ(a.sh_degree(), b.sh_degree());
+  EXPECT_EQ(a.gaussians().position, b.gaussians().position);
+  EXPECT_EQ(a.gaussians().sh, b.gaussians().sh);
+  EXPECT_EQ(a.gaussians().opacity_logit, b.gaussians().opacity_logit);
+  EXPECT_EQ(a.gaussians().log_scale, b.gaussians().log_scale);
+  EXPECT_EQ(a.gaussians().rotation, b.gaussians().rotation);
+}
+
 // The fast schedule (the default): the reference's form scaled to a length from the number of
 // training views, with a Gaussian budget from the image size. --iterations overrides the length.
 TEST(Schedule, FastLengthAndBudgetComeFromTheTrainingData) {

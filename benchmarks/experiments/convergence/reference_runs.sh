@@ -30,7 +30,11 @@ for cell in "$@"; do
     eval_at=500,1000,2000,3000,5000,7000,10000,15000,20000,25000
   elif [ "$iterations" = fast ]; then
     name="${data}_${method}"; dst="$DST/fast/$name.json"; name="${name}_fast"
-    length=(); eval_at=$(seq -s, 1000 1000 29000)  # those past the run's length are not taken
+    # Every 1000 iterations before the end of the fast length (TrainOptions::with_run_length: 500
+    # passes over the training views, rounded up to 100, within 3000..30000); reconstruct refuses
+    # an --eval-at past it.
+    fast_length=$(/usr/bin/python3 -c 'import json, sys; t = len(json.load(open(sys.argv[1]))["splits"]["train"]); print(min(30000, max(3000, (500 * t + 99) // 100 * 100)))' "$DATA/$data/dataset.json")
+    length=(); eval_at=$(seq -s, 1000 1000 $((fast_length - 1)))
   else
     name="${data}_${method}_${iterations}${options:+_$(basename "$options" .json)}"; dst="$DST/tuning/$name.json"
     length=(--iterations "$iterations")  # a candidate's file names its schedule
