@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline regression-baseline clean training-data validation-data adapted-led-rule models
+.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline regression-baseline clean training-data validation-data adapted-led-rule models archive-status archive-commit
 
 all: build
 
@@ -100,6 +100,20 @@ SUITE_CONFIG ?=
 suite: build
 	USER=$${USER:-weathergs} snakemake -s workflow/Snakefile --cores $(JOBS) \
 	  --config weathergs=$(CURDIR)/$(BUILD)/apps/weathergs scenes=$(CURDIR)/scenes $(SUITE_CONFIG)
+
+# The results archive (docs/archive.md): per cell of the suite's matrix, done, stale or missing, and the
+# CPU-hours spent and left; ARCHIVE_DATA=OUT/data also checks the runs' datasets. archive-commit
+# commits what the suite added to benchmarks/results/$(ARCHIVE_SUITE) (every few runs, so that a
+# machine that goes away loses little).
+ARCHIVE_SUITE ?= quick
+ARCHIVE_DATA ?=
+archive-status: build
+	$(BUILD)/apps/weathergs archive status --root benchmarks/results --suite $(ARCHIVE_SUITE) \
+	  $(if $(ARCHIVE_DATA),--data $(ARCHIVE_DATA))
+archive-commit: build
+	git add -- benchmarks/results/$(ARCHIVE_SUITE)
+	git commit -m "results archive $(ARCHIVE_SUITE): $$($(BUILD)/apps/weathergs archive status --root benchmarks/results \
+	  --suite $(ARCHIVE_SUITE) | grep '^done ')" -- benchmarks/results/$(ARCHIVE_SUITE)
 
 # The slow tests, with every tool they need installed (the Slurm group too); a skip is a failure here,
 # as in CI.

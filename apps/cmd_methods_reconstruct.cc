@@ -11,6 +11,7 @@
 #include "core/json_reader.h"
 #include "core/parallel.h"
 #include "core/progress.h"
+#include "methods/archive_restore.h"
 #include "methods/reconstruct.h"
 #include "nerf/trainer.h"
 #include "reconstruction/run.h"
@@ -33,6 +34,8 @@ struct ReconstructArgs {
   TrainFlags train;
   ScoringFlags scoring;
   CLI::App* app = nullptr;
+  std::string archive;  // <root>/<suite> of the results archive (docs/archive.md)
+  bool archive_only = false;
 };
 
 // The 3DGS trainer's flags, which a radiance-field method never reads.
@@ -132,6 +135,18 @@ int run(ReconstructArgs& a) {
     o.led_mask.rule = restoration::led::LedThresholdRule::kAbove;
     o.led_mask.threshold = a.led_threshold;
   }
+  if (!a.archive.empty()) {  // a run the archive holds with this recipe is restored, not trained again
+    const methods::RestoreOutcome r = methods::restore_from_archive(o, a.archive);
+    if (r.restored) {
+      std::printf("restored from archive: %s -> %s\n", r.cell_dir.c_str(), o.out.c_str());
+      return kExitOk;
+    }
+    if (a.archive_only) {
+      std::fprintf(stderr, "not restored: %s\n", r.why.c_str());
+      return kExitCheckFailed;
+    }
+    if (!is_quiet()) std::fprintf(stderr, "reconstruct: not restored (%s): running it\n", r.why.c_str());
+  }
   const bool nerf = recipe.backend == methods::BackendKind::kNerf;
   const int total = nerf ? o.nerf.iterations : o.train.iterations;
   ProgressBar bar("train", total);
@@ -224,6 +239,15 @@ Command make(CLI::App& root) {
       ->check(CLI::Range(1, adaptation::kMaxAdaptIterations))
       ->needs(adapt);
   a->scoring.add_to(sub);
+  CLI::Option* archive =
+      sub->add_option("--archive", a->archive,
+                      "The results archive's suite folder (<root>/<suite>, e.g. benchmarks/results/quick): when it holds "
+                      "this run (the dataset's name, the method, the seed) made with the recipe these options give, "
+                      "copy its results.json and curve.json into --out instead of running (docs/archive.md)");
+  sub->add_flag("--archive-only", a->archive_only,
+                "Never run: restore from --archive (exit 0) or say why not (exit 1: not archived, or archived with "
+                "another recipe, naming the first differing key)")
+      ->needs(archive);
   return {sub, [a] { return run(*a); }};
 }
 

@@ -72,6 +72,20 @@ void check_scoring_resources(const ScoringOptions& options) {
   (void)probe;
 }
 
+Protocol scoring_protocol(const EvaluateOptions& o) {
+  Protocol p;
+  p.ssim = o.scoring.ssim.protocol_name();
+  p.lpips = o.scoring.lpips ? std::optional<std::string>("alex_v0.1") : std::nullopt;
+  p.quantize_uint8 = o.scoring.quantize_uint8;
+  p.split = o.split;
+  if (o.ground_truth != ImageKind::kClean) p.ground_truth = folder_of(o.ground_truth);
+  if (o.mask_dir) {
+    p.mask = fs::path(*o.mask_dir).lexically_normal().filename().string();
+    p.lpips_mask = kLpipsTruthFilled;
+  }
+  return p;
+}
+
 ScoredDataset identify_dataset(const Dataset& ds, bool allow_changed) {
   ScoredDataset out;
   const DatasetIdentity found = compute_dataset_identity(ds.root);
@@ -138,15 +152,7 @@ Results evaluate(const EvaluateOptions& o) {
   r.dataset = ds.info.name;
   r.scene = ds.info.scene;
   r.weather = ds.info.weather;
-  r.protocol.ssim = o.scoring.ssim.protocol_name();
-  r.protocol.lpips = o.scoring.lpips ? std::optional<std::string>("alex_v0.1") : std::nullopt;
-  r.protocol.quantize_uint8 = o.scoring.quantize_uint8;
-  r.protocol.split = o.split;
-  if (o.ground_truth != ImageKind::kClean) r.protocol.ground_truth = folder_of(o.ground_truth);
-  if (o.mask_dir) {
-    r.protocol.mask = fs::path(*o.mask_dir).lexically_normal().filename().string();
-    r.protocol.lpips_mask = kLpipsTruthFilled;
-  }
+  r.protocol = scoring_protocol(o);
 
   std::unique_ptr<Lpips> lpips;
   if (o.scoring.lpips) lpips = std::make_unique<Lpips>(find_lpips_model(o.scoring.lpips_model_search));

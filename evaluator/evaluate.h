@@ -48,6 +48,9 @@ struct EvaluateOptions {
   void validate() const;
 };
 
+// The protocol results scored with these options record (results.json's "protocol").
+Protocol scoring_protocol(const EvaluateOptions& options);
+
 // The identity of the dataset's files as results.json records it (docs/formats.md, "Dataset
 // identity"). When dataset.json records an identity that the files no longer match: InputError naming
 // the dataset, both hashes and the first differing file, unless allow_changed, which keeps the

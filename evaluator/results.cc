@@ -116,10 +116,12 @@ std::string dataset_identity_text(const Results& r) {
   return r.dataset_identity ? r.dataset_identity->sha256 : "none recorded";
 }
 
+Json protocol_to_json(const Protocol& p) { return json_fields::write(p, kProtocolFields); }
+
 Json results_to_json(const Results& r) {
   Json per_view = Json::object();
   for (const auto& [view, v] : r.per_view) per_view[view] = metrics_to_json(v);
-  const Json protocol = json_fields::write(r.protocol, kProtocolFields);
+  const Json protocol = protocol_to_json(r.protocol);
   Json j = {{"format", "weathergs-results"}, {"version", 1}, {"method", r.method}, {"dataset", r.dataset},
             {"scene", r.scene}, {"weather", r.weather}, {"protocol", protocol},
             {"metrics", metrics_to_json(r.metrics)}, {"per_view", per_view},

@@ -78,6 +78,7 @@ MetricValues mean_metrics(const std::vector<std::pair<std::string, MetricValues>
 
 // {"psnr", "ssim", "lpips"} (+ "psnr_infinite": true when PSNR is +inf, with "psnr": null).
 Json metrics_to_json(const MetricValues& m);
+Json protocol_to_json(const Protocol& p);  // results.json's "protocol" block
 Json results_to_json(const Results& r);
 Results results_from_json(const JsonReader& reader);
 Results read_results(const std::string& path);

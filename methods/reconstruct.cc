@@ -7,9 +7,12 @@
 #include "core/dataset_layout.h"
 #include "core/error.h"
 #include "core/json_reader.h"
+#include "core/parallel.h"
+#include "evaluator/recipe.h"
 #include "restoration/led/detect_dataset.h"
 #include "restoration/aef/filter_dataset.h"
 #include "methods/backend.h"
+#include "methods/recipe.h"
 #include "reconstruction/run.h"
 
 namespace weathergs::methods {
@@ -123,13 +126,7 @@ Points points_stage(const Run& run) {
 // 2. The AEF on every view, kept when an earlier run made it with these settings.
 void filter_stage(const Run& run) {
   if (!run.recipe().particle_filter) return;
-  restoration::aef::FilterDatasetOptions f;
-  f.filter = run.o.particle_filter;
-  f.method = run.recipe().aef;
-  if (run.recipe().needs_aef_weights()) {
-    f.task = restoration::aef::AefTask::kAuto;  // the selector decides, per scene, which plugin (or none)
-    f.aef_weights = run.o.aef_weights;
-  }
+  const restoration::aef::FilterDatasetOptions f = aef_stage_options(run.o);
   const std::string out = (run.dir / kFilteredDir).string();
   const int width = run.ds.cameras.empty() ? 0 : run.ds.cameras.front().width;
   if (current_or_refuse(restoration::aef::filter_output(out, f, width), "AEF images").state == StageOutput::State::kComplete)
@@ -142,12 +139,8 @@ void filter_stage(const Run& run) {
 // method asks for per-view maps (which also rules out adapting to drops fixed to the lens).
 void detect_stage(const Run& run) {
   if (!run.recipe().lens_detector) return;
-  restoration::led::DetectDatasetOptions d;
-  d.weights = run.o.led_weights;
-  d.mask = run.o.led_mask;
-  if (run.recipe().led_per_view) d.averaging = restoration::led::LedAveraging::kPerView;
-  const std::optional<adaptation::LedAdaptOptions> adapt =
-      run.recipe().led_per_view ? std::nullopt : run.o.led_adapt;
+  restoration::led::DetectDatasetOptions d = led_stage_options(run.o);
+  const std::optional<adaptation::LedAdaptOptions> adapt = led_stage_adaptation(run.o);
   const Json adaptation = adapt ? adaptation::adaptation_settings_json(*adapt, run.ds.split("train").size()) : Json();
   const std::string out = (run.dir / kDetectedDir).string();
   if (current_or_refuse(restoration::led::detect_output(out, d, adaptation), "LED masks").state ==
@@ -331,11 +324,13 @@ ReconstructResult reconstruct(const ReconstructOptions& given, const reconstruct
   given.validate();
   check_resources(given);
   const Dataset ds = read_dataset(given.dataset);
-  evaluator::identify_dataset(ds, false);  // files that no longer match their record: refused now, not after training
+  // Files that no longer match their record: refused now, not after training.
+  const std::string dataset_sha256 = evaluator::identify_dataset(ds, false).sha256;
   // The run's length and budget for this dataset: snapshots, records and staleness all use them.
   ReconstructOptions o = given;
   o.train = reconstruction::run_length_for(given.train, ds);
   check_resolved(o);
+  const Json recipe = run_recipe(o, ds, dataset_sha256);  // what makes runs comparable (evaluator/recipe.h)
   for (double f : given.eval_fractions) o.eval_at.push_back(std::max(1, int(f * o.train.iterations)));
   open_run_folder(o);
   const Run run{o, spec(o.method), ds, fs::path(o.out), on_stage};
@@ -352,6 +347,9 @@ ReconstructResult reconstruct(const ReconstructOptions& given, const reconstruct
   fs::create_directories(fs::path(renders_dir).parent_path());
   const RenderOutcome rendered = backend->render("test", renders_dir);
   out.results = evaluate_stage(run, renders_dir, points);
+  out.results.method_info[evaluator::kRecipeKey] = recipe;
+  out.results.method_info[evaluator::kRecipeFingerprintKey] = evaluator::recipe_fingerprint(recipe);
+  out.results.method_info["threads"] = num_threads();  // CPU time = the seconds above x threads (archive status)
   curve_stage(run, *backend, out.results);
   evaluator::write_results((run.dir / kResultsFile).string(), out.results);
   out.train_seconds = out.results.method_info.value("train_seconds", 0.0);
