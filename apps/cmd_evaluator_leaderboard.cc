@@ -16,6 +16,7 @@ struct LeaderboardArgs {
   std::string format = "md", output, against_paper;
   bool paper = false;
   bool allow_mixed_data = false;
+  bool allow_mixed_recipes = false;
 };
 
 int run_leaderboard(const LeaderboardArgs& args) {
@@ -30,6 +31,7 @@ int run_leaderboard(const LeaderboardArgs& args) {
   for (const auto& p : args.results) loaded.push_back({p, evaluator::read_results(p)});
   evaluator::LeaderboardOptions options;
   options.allow_mixed_data = args.allow_mixed_data;
+  options.allow_mixed_recipes = args.allow_mixed_recipes;
   std::string text;
   if (args.paper || published) {
     const evaluator::PaperTables tables = evaluator::build_paper_tables(loaded, options);
@@ -65,6 +67,10 @@ Command make_leaderboard(CLI::App& root) {
   sub->add_flag("--allow-mixed-data", args->allow_mixed_data,
                 "Tabulate results of one variant scored on datasets of different identities (refused, exit 2, "
                 "otherwise), marking their cells with a dagger and a note naming the identities");
+  sub->add_flag("--allow-mixed-recipes", args->allow_mixed_recipes,
+                "Tabulate results whose recipes differ where they must agree (a method's options, weights or numerics "
+                "across its runs, one backend's numerics, the LPIPS weights; refused, exit 2, otherwise), marking their "
+                "cells with a double dagger and a note naming the groups and their first differing keys");
   return {sub, [args] { return run_leaderboard(*args); }};
 }
 

@@ -17,7 +17,8 @@ struct ReportArgs {
 
 int run(ReportArgs& a) {
   a.options.command = "weathergs report " + a.options.suite_dir + " -o " + a.options.out_dir +
-                      (a.options.allow_mixed_data ? " --allow-mixed-data" : "");
+                      (a.options.allow_mixed_data ? " --allow-mixed-data" : "") +
+                      (a.options.allow_mixed_recipes ? " --allow-mixed-recipes" : "");
   // The LPIPS weights the scores were made with are this installation's (results record the
   // protocol's name, not the file).
   try {
@@ -45,6 +46,9 @@ Command make(CLI::App& root) {
   sub->add_flag("--allow-mixed-data", a->options.allow_mixed_data,
                 "Show runs of one variant scored on datasets of different identities, or on another dataset than "
                 "data/<variant> (refused, exit 2, otherwise), marked with a dagger");
+  sub->add_flag("--allow-mixed-recipes", a->options.allow_mixed_recipes,
+                "Show runs whose recipes differ where they must agree (as leaderboard --allow-mixed-recipes; refused, "
+                "exit 2, otherwise), marked with a double dagger");
   a->sub = sub;
   return {sub, [a] { return run(*a); }};
 }

@@ -179,6 +179,7 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
                                                 const LeaderboardOptions& options) {
   if (results.empty()) throw InputError("leaderboard", "no results files given");
   const MixedData mixed = find_mixed_data(results, options);
+  const MixedRecipes recipes = find_mixed_recipes(results, options);
   std::vector<std::string> weathers;
   std::map<std::string, std::vector<const LoadedResults*>> by_weather;
   for (const auto& lr : results) {
@@ -192,9 +193,10 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
     const auto& group = by_weather[w];
     t.protocol = group.front()->results.protocol;
     std::map<std::pair<size_t, size_t>, std::vector<const Results*>> cell_results;
-    std::set<std::pair<size_t, size_t>> odd_cells;
+    std::set<std::pair<size_t, size_t>> odd_cells, odd_recipe_cells;
     for (const MixedData::Variant& v : mixed.mixed)
       if (v.weather == w) t.data_notes.push_back(v.scene + ": " + v.identities);
+    t.recipe_notes = recipes.notes(w);
     for (const LoadedResults* lr : group) {
       if (!(lr->results.protocol == t.protocol))
         throw InputError(lr->path, "protocol differs from " + group.front()->path + " (" +
@@ -204,10 +206,12 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
       size_t s = index_of(t.scenes, lr->results.scene.empty() ? lr->results.dataset : lr->results.scene);
       cell_results[{m, s}].push_back(&lr->results);
       if (mixed.is_odd(*lr)) odd_cells.insert({m, s});
+      if (recipes.is_odd(*lr)) odd_recipe_cells.insert({m, s});
     }
     t.cells.assign(t.methods.size(), std::vector<CellStats>(t.scenes.size()));
     for (auto& [key, rs] : cell_results) t.cells[key.first][key.second] = stats(rs);
     for (const auto& [m, s] : odd_cells) t.cells[m][s].other_data = true;
+    for (const auto& [m, s] : odd_recipe_cells) t.cells[m][s].other_recipe = true;
     t.average.resize(t.methods.size());
     for (size_t m = 0; m < t.methods.size(); ++m) {
       CellStats avg;
@@ -218,6 +222,7 @@ std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>
         avg.psnr += c.psnr; avg.ssim += c.ssim; avg.lpips += c.lpips;
         lp = lp && c.has_lpips;
         avg.other_data = avg.other_data || c.other_data;
+        avg.other_recipe = avg.other_recipe || c.other_recipe;
       }
       if (complete) {
         const double k = double(t.scenes.size());
@@ -283,7 +288,7 @@ std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
     bool any = false;
     for (size_t m = 0; m < t.methods.size(); ++m) {
       const CellStats& c = cell(t, m, col);
-      if (!present(c, k) || is_reference(t, m) || c.other_data) continue;
+      if (!present(c, k) || is_reference(t, m) || !cell_marks(c).empty()) continue;
       double v = value(c, k);
       if (!any || (kHigherBetter[k] ? v > best_v : v < best_v)) best_v = v;
       any = true;
@@ -292,7 +297,7 @@ std::vector<std::vector<bool>> best_flags(const LeaderboardTable& t) {
     best_text = format_metric(best_v, kDecimals[k]);
     for (size_t m = 0; m < t.methods.size(); ++m) {
       const CellStats& c = cell(t, m, col);
-      best[m][col] = present(c, k) && !is_reference(t, m) && !c.other_data &&
+      best[m][col] = present(c, k) && !is_reference(t, m) && cell_marks(c).empty() &&
                      format_metric(value(c, k), kDecimals[k]) == best_text;
     }
   }
@@ -326,7 +331,8 @@ bool any_repeats(const LeaderboardTable& t) {
 
 std::string protocol_note(const LeaderboardTable& t) {
   const bool refs = std::find(t.reference.begin(), t.reference.end(), true) != t.reference.end();
-  const std::string data = other_data_note(t.data_notes);
+  const std::string data = other_data_note(t.data_notes) +
+                           (t.recipe_notes.empty() || t.data_notes.empty() ? "" : " ") + other_recipe_note(t.recipe_notes);
   return "Protocol: " + t.protocol.to_string() + ". Best per column in bold" +
          (refs && !data.empty() ? " (reference lines and marked cells excluded)."
           : refs               ? " (reference lines excluded)."
@@ -353,7 +359,7 @@ void markdown(std::ostringstream& o, const LeaderboardTable& t) {
       std::string s = cell_text(t, cell(t, m, col), cols[col].metric, " ± ");
       if (s.empty()) s = "–";
       else if (best[m][col]) s = "**" + s + "**";
-      else if (cell(t, m, col).other_data) s += std::string(" ") + kOtherDataMarker;
+      else if (!cell_marks(cell(t, m, col)).empty()) s += " " + cell_marks(cell(t, m, col));
       o << " " << s << " |";
     }
     o << "\n";
@@ -372,6 +378,7 @@ void csv(std::ostringstream& o, const LeaderboardTable& t, bool header) {
       if (any_repeats(t)) o << "," << csv_escape(c.group + "_" + m + (t.ci95 ? "_ci95" : "_std"));
     }
     if (!t.data_notes.empty()) o << ",other_data";
+    if (!t.recipe_notes.empty()) o << ",other_recipe";
     o << "\n";
   }
   for (size_t m = 0; m < t.methods.size(); ++m) {
@@ -386,6 +393,12 @@ void csv(std::ostringstream& o, const LeaderboardTable& t, bool header) {
       std::string scenes;
       for (size_t s = 0; s < t.scenes.size(); ++s)
         if (t.cells[m][s].other_data) scenes += (scenes.empty() ? "" : ";") + t.scenes[s];
+      o << "," << csv_escape(scenes);
+    }
+    if (!t.recipe_notes.empty()) {  // the same for results made with another recipe
+      std::string scenes;
+      for (size_t s = 0; s < t.scenes.size(); ++s)
+        if (t.cells[m][s].other_recipe) scenes += (scenes.empty() ? "" : ";") + t.scenes[s];
       o << "," << csv_escape(scenes);
     }
     o << "\n";
@@ -414,7 +427,10 @@ void latex(std::ostringstream& o, const LeaderboardTable& t) {
       if (s == "+inf") s = "$+\\infty$";
       if (s.empty()) s = "--";
       else if (best[m][col]) s = "\\textbf{" + s + "}";
-      else if (cell(t, m, col).other_data) s += "$^\\dagger$";
+      else if (!cell_marks(cell(t, m, col)).empty())
+        s += std::string("$^") + (cell(t, m, col).other_data && cell(t, m, col).other_recipe ? "{\\dagger\\ddagger}"
+                                  : cell(t, m, col).other_data                             ? "\\dagger"
+                                                                                           : "\\ddagger") + "$";
       o << " & " << s;
     }
     o << " \\\\\n";
@@ -424,6 +440,11 @@ void latex(std::ostringstream& o, const LeaderboardTable& t) {
     std::string note = other_data_note(t.data_notes);
     note.replace(0, std::string(kOtherDataMarker).size(), "");
     o << "{\\footnotesize $^\\dagger$" << latex_escape(note) << "}\n";
+  }
+  if (!t.recipe_notes.empty()) {
+    std::string note = other_recipe_note(t.recipe_notes);
+    note.replace(0, std::string(kOtherRecipeMarker).size(), "");
+    o << "{\\footnotesize $^\\ddagger$" << latex_escape(note) << "}\n";
   }
   o << "\\end{table}\n\n";
 }
@@ -443,7 +464,10 @@ void html(std::ostringstream& o, const LeaderboardTable& t) {
     for (size_t col = 0; col < cols.size(); ++col) {
       std::string s = cell_text(t, cell(t, m, col), cols[col].metric, " &plusmn; ");
       if (s.empty()) s = "&ndash;";
-      else if (!best[m][col] && cell(t, m, col).other_data) s += " &dagger;";
+      else if (!best[m][col]) {
+        if (cell(t, m, col).other_data) s += " &dagger;";
+        if (cell(t, m, col).other_recipe) s += " &Dagger;";
+      }
       o << (cols[col].metric == 0 ? "<td class=\"first\">" : "<td>") << (best[m][col] ? "<b>" + s + "</b>" : s) << "</td>";
     }
     o << "</tr>\n";

@@ -37,6 +37,9 @@ struct CellStats {
   // Holds a result scored on other data than its column's (LeaderboardOptions::allow_mixed_data):
   // marked, never in bold.
   bool other_data = false;
+  // Holds a result made with another recipe than the rest of its method's, or with none recorded
+  // (LeaderboardOptions::allow_mixed_recipes): marked, never in bold.
+  bool other_recipe = false;
   static constexpr double kNoInterval = std::numeric_limits<double>::quiet_NaN();
 };
 
@@ -58,11 +61,15 @@ struct LeaderboardTable {
   Protocol protocol;
   // One line per column whose results were scored on more than one dataset (allow_mixed_data).
   std::vector<std::string> data_notes;
+  // One line per group of runs made with more than one recipe (allow_mixed_recipes).
+  std::vector<std::string> recipe_notes;
 };
 
 struct LeaderboardOptions {
   // Results of one variant on datasets of different identities: marked instead of refused.
   bool allow_mixed_data = false;
+  // Results whose recipes differ where they must agree (find_mixed_recipes): marked instead of refused.
+  bool allow_mixed_recipes = false;
 };
 
 // Which results were scored on other data than their variant's (scene and weather): per variant, the
@@ -83,6 +90,41 @@ MixedData find_mixed_data(const std::vector<LoadedResults>& results, const Leade
 // The marker of a cell holding odd results, and the note that explains it under a table.
 inline constexpr const char* kOtherDataMarker = "†";
 std::string other_data_note(const std::vector<std::string>& lines);  // "" for none
+
+// Which results were made with another recipe than the rest of their group (evaluator/recipe.h;
+// docs/evaluator.md, "One recipe"). The results given to one leaderboard must agree, where a recipe
+// is recorded, on:
+//   - the scoring (the protocol and the LPIPS weights), over all results;
+//   - the trainer-numerics version, over all results of one backend (3DGS, the radiance field);
+//   - everything but what the dataset makes of the recipe (recipe_across_datasets: the options,
+//     restoration settings, weights, numerics, scoring, points policy), over all results of one
+//     method, across variants and seeds;
+//   - everything but the dataset's identity (which find_mixed_data judges), over the results of one
+//     method on one variant: the run length and budget the schedule gave, the points.
+// Different methods differ by design and are not compared otherwise; a result that records no recipe
+// (made before recipes were, or a method of one's own scored by `evaluate`) takes part in its
+// method's groups only. Per group, the recipe most of its results record (the first on a tie) is the
+// group's; a result with another, or with none recorded, is odd, unless no result of the group
+// records one. Without
+// allow_mixed_recipes the first odd result is an InputError naming it, a result of the group's
+// recipe and the first key where they differ.
+struct MixedRecipes {
+  std::set<const LoadedResults*> odd;
+  // Per group with odd results: "weathergs: 2 on recipe 1a2b3c4d5e6f (the group's); 1 on recipe
+  // 9f8e7d6c5b4a (options/densify_until)", with the weathers of its odd results.
+  struct Group {
+    std::set<std::string> weathers;
+    std::string note;
+  };
+  std::vector<Group> groups;
+  bool is_odd(const LoadedResults& r) const { return odd.count(&r) > 0; }
+  std::vector<std::string> notes(const std::string& weather) const;  // "" = every weather
+};
+MixedRecipes find_mixed_recipes(const std::vector<LoadedResults>& results, const LeaderboardOptions& options);
+inline constexpr const char* kOtherRecipeMarker = "‡";
+std::string other_recipe_note(const std::vector<std::string>& lines);  // "" for none
+// A cell's markers: kOtherDataMarker and/or kOtherRecipeMarker ("" for none).
+std::string cell_marks(const CellStats& c);
 
 // oracle (3DGS on the clean images), nerf-oracle and gt-masks (ground-truth masks): bounds, not
 // competitors. Every table marks them as reference lines: shown, never in bold.

@@ -116,7 +116,8 @@ const std::pair<const char*, const char*> kComparisons[] = {
     {"gs-w-lite", "3dgs"},           {"derainnerf", "nerf"}};
 
 std::vector<PairedDifference> paired_differences(const std::vector<LoadedResults>& results,
-                                                 const std::vector<std::string>& weathers, const MixedData& mixed) {
+                                                 const std::vector<std::string>& weathers, const MixedData& mixed,
+                                                 const MixedRecipes& recipes) {
   std::vector<PairedDifference> out;
   for (const auto& [method, baseline] : kComparisons) {
     std::vector<std::string> groups = weathers;
@@ -125,28 +126,31 @@ std::vector<PairedDifference> paired_differences(const std::vector<LoadedResults
       // (variant, seed) -> that method's metrics (repeats averaged), for the method and the baseline.
       std::map<std::pair<std::string, std::string>, std::array<std::vector<double>, 3>> a, b;
       std::set<std::pair<std::string, std::string>> odd;  // (variant, seed) pairs with a result on other data
+      std::set<std::pair<std::string, std::string>> odd_recipe;  // ... of another recipe
       for (const auto& lr : results) {
         if (w != "all" && lr.results.weather != w) continue;
         auto* side = lr.results.method == method ? &a : lr.results.method == baseline ? &b : nullptr;
         if (!side) continue;
         if (mixed.is_odd(lr)) odd.insert({variant_of(lr.results), seed_key(lr)});
+        if (recipes.is_odd(lr)) odd_recipe.insert({variant_of(lr.results), seed_key(lr)});
         auto& v = (*side)[{variant_of(lr.results), seed_key(lr)}];
         const auto m = metrics_of(lr.results);
         for (int k = 0; k < 3; ++k) v[k].push_back(m[k]);
       }
       std::array<std::vector<double>, 3> d;
-      bool other_data = false;
+      bool other_data = false, other_recipe = false;
       for (const auto& [key, va] : a) {
         const auto it = b.find(key);
         if (it == b.end()) continue;
         other_data = other_data || odd.count(key) > 0;
+        other_recipe = other_recipe || odd_recipe.count(key) > 0;
         for (int k = 0; k < 3; ++k) {
           const double x = mean_of(va[k]) - mean_of(it->second[k]);
           if (std::isfinite(x)) d[k].push_back(x);
         }
       }
       if (d[0].empty()) continue;
-      out.push_back({method, baseline, w, mean_ci95(d[0]), mean_ci95(d[1]), mean_ci95(d[2]), other_data});
+      out.push_back({method, baseline, w, mean_ci95(d[0]), mean_ci95(d[1]), mean_ci95(d[2]), other_data, other_recipe});
     }
   }
   return out;
@@ -160,6 +164,8 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const 
   const MixedData mixed = find_mixed_data(results, options);
   for (const MixedData::Variant& v : mixed.mixed)
     out.data_notes.push_back(v.scene + (v.weather.empty() ? "" : " " + v.weather) + ": " + v.identities);
+  const MixedRecipes recipes = find_mixed_recipes(results, options);
+  out.recipe_notes = recipes.notes("");
   std::stable_sort(out.quality.begin(), out.quality.end(), [](const LeaderboardTable& a, const LeaderboardTable& b) {
     return weather_rank(a.weather) < weather_rank(b.weather);
   });
@@ -196,6 +202,7 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const 
   a.protocol = out.quality.empty() ? Protocol{} : out.quality.front().protocol;
   a.ci95 = true;
   a.data_notes = out.data_notes;
+  a.recipe_notes = out.recipe_notes;
   for (const char* m : kAblationMethods) {
     std::map<std::string, std::vector<const Results*>> per_variant;
     for (const auto& lr : results) {
@@ -208,7 +215,10 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const 
     }
     if (per_variant.empty()) continue;
     CellStats avg;
-    for (const auto& lr : results) avg.other_data = avg.other_data || (lr.results.method == m && mixed.is_odd(lr));
+    for (const auto& lr : results) {
+      avg.other_data = avg.other_data || (lr.results.method == m && mixed.is_odd(lr));
+      avg.other_recipe = avg.other_recipe || (lr.results.method == m && recipes.is_odd(lr));
+    }
     bool complete = per_variant.size() == variants.size(), lp = true;
     if (complete) {
       for (const auto& [v, rs] : per_variant) {
@@ -271,7 +281,7 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const 
   }
   std::vector<std::string> weathers;
   for (const auto& t : out.quality) weathers.push_back(t.weather);
-  out.differences = paired_differences(results, weathers, mixed);
+  out.differences = paired_differences(results, weathers, mixed, recipes);
   return out;
 }
 
@@ -384,14 +394,20 @@ const char* kDifferenceNote =
     "is better; LPIPS: negative = the method is better.";
 
 std::string render_differences(const std::vector<PairedDifference>& rows, const std::string& title, TableFormat format,
-                               const std::vector<std::string>& data_notes) {
+                               const std::vector<std::string>& data_notes, const std::vector<std::string>& recipe_notes) {
   const char* header[] = {"Difference", "Weather", "Pairs", "ΔPSNR (dB)", "ΔSSIM", "ΔLPIPS"};
   bool marked = false;
-  for (const auto& r : rows) marked = marked || r.other_data;
-  const std::string note = std::string(kDifferenceNote) + (marked ? " " + other_data_note(data_notes) : "");
+  bool marked_recipe = false;
+  for (const auto& r : rows) {
+    marked = marked || r.other_data;
+    marked_recipe = marked_recipe || r.other_recipe;
+  }
+  const std::string note = std::string(kDifferenceNote) + (marked ? " " + other_data_note(data_notes) : "") +
+                           (marked_recipe ? " " + other_recipe_note(recipe_notes) : "");
   std::ostringstream o;
   auto cells = [&](const PairedDifference& r, const char* pm) {
-    const std::string mark = r.other_data ? std::string(" ") + kOtherDataMarker : "";
+    const std::string marks = std::string(r.other_data ? kOtherDataMarker : "") + (r.other_recipe ? kOtherRecipeMarker : "");
+    const std::string mark = marks.empty() ? "" : " " + marks;
     return std::vector<std::string>{r.method + " − " + r.baseline + mark, r.weather, std::to_string(r.psnr.n),
                                     signed_interval(r.psnr, 2, pm), signed_interval(r.ssim, 3, pm),
                                     signed_interval(r.lpips, 3, pm)};
@@ -423,7 +439,8 @@ std::string render_differences(const std::vector<PairedDifference>& rows, const 
            "$\\Delta$SSIM & $\\Delta$LPIPS \\\\\n\\midrule\n";
       for (const auto& r : rows) {
         std::vector<std::string> c = cells(r, "$\\pm$");
-        c[0] = latex_escape(r.method + " -- " + r.baseline) + (r.other_data ? "$^\\dagger$" : "");
+        c[0] = latex_escape(r.method + " -- " + r.baseline) + (r.other_data ? "$^\\dagger$" : "") +
+               (r.other_recipe ? "$^\\ddagger$" : "");
         for (size_t i = 0; i < c.size(); ++i)
           o << (i ? " & " : "") << (c[i].empty() ? "--" : (i == 1 ? latex_escape(c[i]) : c[i]));
         o << " \\\\\n";
@@ -466,7 +483,7 @@ std::string render_paper_tables(const PaperTables& t, TableFormat format) {
   o += render_cost(t.cost, table4, format);
   if (!t.differences.empty()) {
     separate();
-    o += render_differences(t.differences, "Paired differences", format, t.data_notes);
+    o += render_differences(t.differences, "Paired differences", format, t.data_notes, t.recipe_notes);
   }
   return o + document_end(format);
 }

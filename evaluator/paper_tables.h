@@ -8,8 +8,9 @@
 // one cell (seeds) show mean ± the half-width of the 95% Student-t interval, and so do averages over
 // scenes when several seeds ran on every scene. A last table gives paired differences (same variant,
 // same seed) with their intervals: WeatherGS - 3DGS, each ablation - the full method, GS-W - 3DGS and
-// DerainNeRF - NeRF. Results on other data than their variant's are refused or, when allowed, marked
-// (leaderboard.h): in the quality tables' cells, the ablation's averages and the differences' rows.
+// DerainNeRF - NeRF. Results on other data than their variant's, and results of mixed recipes, are
+// refused or, when allowed, marked (leaderboard.h): in the quality tables' cells, the ablation's
+// averages and the differences' rows.
 #pragma once
 
 #include <string>
@@ -38,6 +39,7 @@ struct PairedDifference {
   std::string method, baseline, weather;
   MeanInterval psnr, ssim, lpips;  // lpips.n == 0 when a pair lacks LPIPS
   bool other_data = false;         // a pair holds a result on other data than its variant's
+  bool other_recipe = false;       // a pair holds a result of another recipe than its method's
 };
 
 struct PaperTables {
@@ -47,6 +49,7 @@ struct PaperTables {
   std::vector<CostRow> cost;              // Table IV, in the order of the quality tables' rows
   std::vector<PairedDifference> differences;  // for the comparisons that have pairs
   std::vector<std::string> data_notes;        // every mixed variant, for the tables that span weathers
+  std::vector<std::string> recipe_notes;      // every group of mixed recipes, likewise
 };
 
 PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const LeaderboardOptions& options = {});

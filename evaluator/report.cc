@@ -17,6 +17,7 @@
 #include "core/json_reader.h"
 #include "core/version.h"
 #include "evaluator/paper_tables.h"
+#include "evaluator/recipe.h"
 #include "evaluator/report_assets.h"
 
 namespace weathergs::evaluator {
@@ -48,6 +49,9 @@ struct Run {
   int seed = 0;
   fs::path dir;
   LoadedResults results;
+  // Whether the run kept its test renders; a run restored from the results archive has none
+  // (docs/archive.md): its numbers are shown, its images are not.
+  bool renders = false;
 };
 
 std::vector<Run> find_runs(const fs::path& suite) {
@@ -83,6 +87,7 @@ std::vector<Run> find_runs(const fs::path& suite) {
         r.column = r.method + "/seed" + std::to_string(seed);
         r.dir = dir;
         r.results = {(dir / "results.json").string(), read_results((dir / "results.json").string())};
+        r.renders = fs::is_directory(dir / "renders" / "test");
         out.push_back(std::move(r));
       }
     }
@@ -116,9 +121,9 @@ Json stat_cell(double mean, double population_std, int n, int decimals, const st
 // (scene, weather) of the results -> the runs/<variant>/ folder that holds them.
 using VariantOf = std::map<std::pair<std::string, std::string>, std::string>;
 
-// A cell's text with the mixed-data marker when it holds runs on other data.
-Json marked(Json cell, bool other_data) {
-  if (other_data) cell["text"] = cell["text"].get<std::string>() + " " + kOtherDataMarker;
+// A cell's text with the markers of the runs on other data or of other recipes it holds.
+Json marked(Json cell, const CellStats& s) {
+  if (!cell_marks(s).empty()) cell["text"] = cell["text"].get<std::string>() + " " + cell_marks(s);
   return cell;
 }
 
@@ -143,14 +148,15 @@ Json quality_table(const LeaderboardTable& t, const std::string& id, const std::
       if (!avg && variant_of && s.n > 0)
         if (auto it = variant_of->find({t.scenes[g], t.weather}); it != variant_of->end())
           link = to_suite + "runs/" + it->second + "/" + method + "/";
-      cells[groups[g] + ".psnr"] = marked(stat_cell(s.psnr, s.psnr_std, s.n, 2, link), s.other_data);
-      cells[groups[g] + ".ssim"] = marked(stat_cell(s.ssim, s.ssim_std, s.n, 4, link), s.other_data);
+      cells[groups[g] + ".psnr"] = marked(stat_cell(s.psnr, s.psnr_std, s.n, 2, link), s);
+      cells[groups[g] + ".ssim"] = marked(stat_cell(s.ssim, s.ssim_std, s.n, 4, link), s);
       cells[groups[g] + ".lpips"] =
-          s.has_lpips ? marked(stat_cell(s.lpips, s.lpips_std, s.n, 4, link), s.other_data) : Json{{"text", "–"}};
+          s.has_lpips ? marked(stat_cell(s.lpips, s.lpips_std, s.n, 4, link), s) : Json{{"text", "–"}};
     }
     rows.push_back({{"method", method}, {"reference", ref}, {"cells", cells}});
   }
-  const std::string data = other_data_note(t.data_notes);
+  const std::string data = other_data_note(t.data_notes) +
+                           (t.recipe_notes.empty() || t.data_notes.empty() ? "" : " ") + other_recipe_note(t.recipe_notes);
   return {{"id", id},
           {"title", t.title.empty() ? "Weather: " + t.weather : t.title},
           {"note", t.average_note + " Cells over several seeds show mean ± the 95% confidence interval (Student's t)." +
@@ -259,6 +265,7 @@ ReportSummary write_report(const ReportOptions& o) {
   for (const Run& r : runs) loaded.push_back(r.results);
   LeaderboardOptions board;
   board.allow_mixed_data = o.allow_mixed_data;
+  board.allow_mixed_recipes = o.allow_mixed_recipes;
   // Also checks that the protocols agree, and that each variant's runs were scored on one dataset.
   const PaperTables paper = build_paper_tables(loaded, board);
   // The page shows data/<variant>'s inputs and truth beside each run: a run that records its dataset's
@@ -268,6 +275,7 @@ ReportSummary write_report(const ReportOptions& o) {
   const MixedData mixed = find_mixed_data(loaded, board);
   for (size_t i = 0; i < runs.size(); ++i)
     if (mixed.is_odd(loaded[i])) other_data.insert(&runs[i]);
+  const MixedRecipes recipes = find_mixed_recipes(loaded, board);
   for (const Run& r : runs) {
     const fs::path data = suite / "data" / r.variant;
     if (!fs::exists(data / "dataset.json")) continue;  // refused below, naming the variant
@@ -305,7 +313,12 @@ ReportSummary write_report(const ReportOptions& o) {
   std::map<std::string, std::vector<const Run*>> by_variant;
   for (const Run& r : runs) by_variant[r.variant].push_back(&r);
   Json variants = Json::array(), datasets = Json::array();
-  for (auto& [variant, vruns] : by_variant) {
+  for (auto& [variant, all_runs] : by_variant) {
+    std::vector<const Run*> vruns;  // the columns: runs with their renders
+    Json without_renders = Json::array();
+    for (const Run* r : all_runs)
+      if (r->renders) vruns.push_back(r);
+      else without_renders.push_back(r->method + " (seed " + std::to_string(r->seed) + ")");
     std::stable_partition(vruns.begin(), vruns.end(), [](const Run* r) { return !is_reference_method(r->method); });
     const fs::path data = suite / "data" / variant;
     if (!fs::exists(data / "dataset.json"))
@@ -316,7 +329,8 @@ ReportSummary write_report(const ReportOptions& o) {
     for (const Run* r : vruns)
       columns.push_back({{"id", r->column},
                          {"label", r->method + " (seed " + std::to_string(r->seed) + ")" +
-                                       (other_data.count(r) ? std::string(" ") + kOtherDataMarker : "")},
+                                       (other_data.count(r) ? std::string(" ") + kOtherDataMarker : "") +
+                                       (recipes.is_odd(loaded[size_t(r - runs.data())]) ? std::string(" ") + kOtherRecipeMarker : "")},
                          {"kind", "method"},
                          {"method", r->method},
                          {"seed", r->seed},
@@ -391,9 +405,10 @@ ReportSummary write_report(const ReportOptions& o) {
                         {"height", cam.height},
                         {"columns", columns},
                         {"overlays", overlays},
+                        {"without_renders", without_renders},
                         {"views", jviews}});
     datasets.push_back({{"name", variant},
-                        {"ground_truth_sha256", vruns.front()->results.results.sha256_ground_truth},
+                        {"ground_truth_sha256", all_runs.front()->results.results.sha256_ground_truth},
                         {"dataset_identity", data_identity[variant]}});
     ++summary.variants;
   }
@@ -403,8 +418,10 @@ ReportSummary write_report(const ReportOptions& o) {
   Json curves = Json::array(), jruns = Json::array();
   std::map<std::string, std::string> weights;  // name -> sha256
   std::set<std::string> commits;
-  for (const Run& r : runs) {
+  for (size_t ri = 0; ri < runs.size(); ++ri) {
+    const Run& r = runs[ri];
     const Json& mi = r.results.results.method_info;
+    const std::optional<RecordedRecipe> recipe = recorded_recipe(r.results.results, r.results.path);
     const fs::path curve = r.dir / "curve.json";
     if (fs::exists(curve)) {
       Json points = Json::array();
@@ -423,6 +440,9 @@ ReportSummary write_report(const ReportOptions& o) {
                      {"path", to_suite + fs::relative(r.dir, suite).generic_string() + "/"},
                      {"dataset_identity", short_dataset_identity(r.results.results)},
                      {"other_data", other_data.count(&r) > 0},
+                     {"recipe", recipe ? recipe->fingerprint.substr(0, 12) : "none recorded"},
+                     {"other_recipe", recipes.is_odd(loaded[ri])},
+                     {"archived", !r.renders},
                      {"train_seconds", mi.value("train_seconds", Json(nullptr))},
                      {"peak_rss_mb", mi.value("peak_rss_mb", Json(nullptr))},
                      {"num_gaussians", mi.value("num_gaussians", Json(nullptr))}});

@@ -28,6 +28,8 @@ struct ReportOptions {
   // suite's data/<variant> that the page shows beside them: marked instead of refused
   // (evaluator/leaderboard.h).
   bool allow_mixed_data = false;
+  // Runs whose recipes differ where they must agree (find_mixed_recipes): marked instead of refused.
+  bool allow_mixed_recipes = false;
   void validate() const;  // InputError naming the field
 };
 
@@ -40,7 +42,9 @@ struct ReportSummary {
 // InputError (naming the folder or file) when the suite has no runs, a run's results or renders are
 // missing or unreadable, a variant's dataset is absent, or (unless allow_mixed_data) a run that
 // records its dataset's identity was scored on other data than its variant's other runs or than
-// data/<variant>. Runs that record no identity are compared with each other only.
+// data/<variant>, or (unless allow_mixed_recipes) runs of mixed recipes (leaderboard.h). Runs that
+// record no identity are compared with each other only. A run without renders/test/ (restored from
+// the results archive) is in the tables, curves and cost but has no column of images.
 ReportSummary write_report(const ReportOptions& options);
 
 // The 95% confidence interval's half-width of a mean over n values with sample standard deviation

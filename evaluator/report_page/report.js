@@ -271,6 +271,8 @@
     return [
       el('p', { class: 'muted' }, `scene ${v.scene}, weather ${v.weather}${size}; ${views.length} test view(s). `,
         'Click an image to zoom the same spot of every image of its view.'),
+      (v.without_renders || []).length ? el('p', { class: 'muted', 'data-without-renders': v.name },
+        `Restored from the results archive, which keeps no renders (their numbers are in the tables): ${v.without_renders.join(', ')}.`) : null,
       controls,
       el('div', { class: 'scroll grid-scroll' }, el('table', { class: 'grid', 'data-variant': v.name }, el('thead', null, head), body)),
     ];
@@ -364,12 +366,13 @@
       columns: [{ key: 'variant', label: 'variant' }, { key: 'method', label: 'method' }, { key: 'seed', label: 'seed' },
         { key: 'train_seconds', label: 'training (s)' }, { key: 'peak_rss_mb', label: 'peak memory (MiB)' },
         { key: 'num_gaussians', label: 'Gaussians' }, { key: 'dataset_identity', label: 'dataset identity' },
-        { key: 'path', label: 'run folder' }],
+        { key: 'recipe', label: 'recipe' }, { key: 'path', label: 'run folder' }],
       rows: runs.map((r) => ({ reference: false, cells: {
         variant: { text: r.variant }, method: { text: r.method }, seed: numberCell(r.seed, 0),
         train_seconds: numberCell(r.train_seconds, 1, fixed), peak_rss_mb: numberCell(r.peak_rss_mb, 0),
         num_gaussians: numberCell(r.num_gaussians, 0),
         dataset_identity: { text: (r.dataset_identity || DASH) + (r.other_data ? ' \u2020' : '') },
+        recipe: { text: (r.recipe || DASH) + (r.other_recipe ? ' \u2021' : '') + (r.archived ? ' (archived)' : '') },
         path: { text: r.path, link: r.path } } })),
     };
     return [

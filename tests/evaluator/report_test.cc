@@ -9,6 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/dataset_identity.h"
 #include "core/json_reader.h"
+#include "evaluator/recipe.h"
 #include "evaluator/report.h"
 #include "evaluator/results.h"
 #include "tests/core/test_util.h"
@@ -191,6 +192,51 @@ TEST(Report, RunsOnOtherDataAreRefusedOrMarked) {
   EXPECT_TRUE(marked_cell);
   EXPECT_TRUE(noted);
   EXPECT_NE(d.at("provenance").at("command").get<std::string>().find("--allow-mixed-data"), std::string::npos);
+}
+
+// Records a recipe in a run's results.json, as reconstruct does.
+void set_recipe(const std::string& results, int densify_until) {
+  const Json recipe{{"method", "noise"}, {"backend", "3dgs"}, {"numerics", "3dgs-numerics-1"},
+                    {"options", {{"densify_until", densify_until}}}};
+  Json j = read_json_file(results);
+  j["method_info"][kRecipeKey] = recipe;
+  j["method_info"][kRecipeFingerprintKey] = recipe_fingerprint(recipe);
+  write_file_atomic(results, j.dump(2));
+}
+
+// A run restored from the results archive has no renders: the page lists it without images and keeps
+// its numbers; runs of one method with other recipes are refused unless --allow-mixed-recipes.
+TEST(Report, ArchivedRunsWithoutRendersAndMixedRecipes) {
+  TempDir tmp;
+  const std::string suite = make_suite(tmp), report = tmp / "report";
+  const std::string make_report = kBin + " --quiet report " + suite + " -o " + report;
+  fs::remove_all(suite + "/runs/park_snow/box-blur/seed0/renders");
+  for (const char* v : {"park_rain", "park_snow"})
+    for (int seed : {1, 2}) set_recipe(suite + "/runs/" + v + "/noise/seed" + std::to_string(seed) + "/results.json", 15000);
+  auto r = run_command(make_report);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Json d = read_data_js(report);
+  for (const Json& v : d.at("variants")) {
+    const bool snow = v.at("name") == "park_snow";
+    EXPECT_EQ(v.at("columns").size(), snow ? 4u : 5u) << v.at("columns").dump();
+    EXPECT_EQ(v.at("without_renders"), snow ? Json::array({"box-blur (seed 0)"}) : Json::array());
+  }
+  int archived = 0;
+  for (const Json& run : d.at("runs")) archived += run.at("archived").get<bool>();
+  EXPECT_EQ(archived, 1);
+  EXPECT_NE(d.at("tables").dump().find("box-blur"), std::string::npos);  // its numbers stay in the tables
+  // One seed of noise with another option: refused, naming it; marked when allowed.
+  set_recipe(suite + "/runs/park_rain/noise/seed2/results.json", 7000);
+  r = run_command(make_report);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("park_rain/noise/seed2/results.json"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("options/densify_until: 7000 vs 15000"), std::string::npos) << r.output;
+  r = run_command(make_report + " --allow-mixed-recipes");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  d = read_data_js(report);
+  for (const Json& run : d.at("runs"))
+    EXPECT_EQ(run.at("other_recipe"), run.at("variant") == "park_rain" && run.at("seed") == 2) << run.dump();
+  EXPECT_NE(d.at("tables").dump().find("‡"), std::string::npos);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // workflow/Snakefile end to end on the tiny profile: one variant, two methods, one seed; then a
-// re-run does nothing and a removed result is the only cell run again.
+// re-run does nothing, a removed result is the only cell run again, and runs added to the results
+// archive are restored, not trained, once their folders are gone.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -25,8 +26,8 @@ TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
                           "/workflow/Snakefile --cores 2 --config weathergs=" + WEATHERGS_BINARY + " scenes=" + src +
                           "/scenes out=" + out + " cache=" + (tmp / "cache") +
                           " 'variants=[pool_rain]' 'methods=[3dgs,oracle]' 'seeds=[1]' iterations=150";
-  auto run = [&](const std::string& log) {
-    const int st = std::system((cmd + " > '" + log + "' 2>&1").c_str());
+  auto run = [&](const std::string& log, const std::string& more_config = "") {
+    const int st = std::system((cmd + more_config + " > '" + log + "' 2>&1").c_str());
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
   };
   ASSERT_EQ(run(tmp / "1.log"), 0) << read_file(tmp / "1.log");
@@ -72,6 +73,30 @@ TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
   EXPECT_EQ(jobs, 1u) << log3;
   EXPECT_EQ(read_file(out + "/runs/pool_rain/oracle/seed1/model/point_cloud.ply"), ply);
   EXPECT_TRUE(fs::exists(out + "/runs/pool_rain/oracle/seed1/results.json"));
+  // The results archive (docs/archive.md): both runs added, every run folder deleted, the suite run
+  // again with the archive: each cell is restored (its recipe unchanged), nothing trains, and the
+  // leaderboard is the same, byte for byte.
+  const std::string archive = tmp / "results";
+  for (const char* m : {"3dgs", "oracle"}) {
+    const auto added = weathergs::testing::run_command(std::string(WEATHERGS_BINARY) + " archive add " + out +
+                                                       "/runs/pool_rain/" + m + "/seed1 --root " + archive + " --suite tiny");
+    ASSERT_EQ(added.exit_code, 0) << added.output;
+  }
+  const std::string board = read_file(out + "/leaderboard.md");
+  fs::remove_all(out + "/runs");
+  ASSERT_EQ(run(tmp / "4.log", " archive=" + archive + "/tiny"), 0) << read_file(tmp / "4.log");
+  const std::string log4 = read_file(tmp / "4.log");
+  EXPECT_EQ(log4.find("rule generate"), std::string::npos) << log4;
+  for (const char* m : {"3dgs", "oracle"}) {
+    const std::string cell = std::string("[pool_rain ") + m + " seed1] restored from archive: " + archive + "/tiny/pool_rain/" + m;
+    EXPECT_NE(log4.find(cell), std::string::npos) << cell << "\n" << log4;
+    EXPECT_FALSE(fs::exists(out + "/runs/pool_rain/" + m + "/seed1/model")) << m << " trained";
+    EXPECT_EQ(read_file(out + "/runs/pool_rain/" + m + "/seed1/results.json"),
+              read_file(archive + "/tiny/pool_rain/" + m + "/seed1/results.json"));
+  }
+  EXPECT_EQ(log4.find("reconstruct: training"), std::string::npos) << log4;
+  EXPECT_EQ(read_file(out + "/leaderboard.md"), board);
+  EXPECT_TRUE(fs::exists(out + "/report/index.html"));  // the results browser, with the restored runs' numbers
 }
 
 // `iterations: fast` (a dry run): no --iterations, the curve as fractions of each run's own length,
