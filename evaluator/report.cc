@@ -54,9 +54,14 @@ struct Run {
   bool renders = false;
 };
 
-std::vector<Run> find_runs(const fs::path& suite) {
-  const fs::path runs = suite / "runs";
-  if (!fs::is_directory(runs)) throw InputError(runs.string(), "missing: a suite folder has runs/<variant>/<method>/seed<S>/");
+// A suite's runs: <suite>/runs/<variant>/<method>/seed<S>/, or, in a results archive's suite folder
+// (`archive` set: no runs/, no data/), <suite>/<variant>/<method>/seed<S>/.
+std::vector<Run> find_runs(const fs::path& suite, bool* archive) {
+  *archive = fs::is_directory(suite) && !fs::exists(suite / "runs") && !fs::exists(suite / "data");
+  const fs::path runs = *archive ? suite : suite / "runs";
+  if (!fs::is_directory(runs))
+    throw InputError(runs.string(), "missing: a suite folder has runs/<variant>/<method>/seed<S>/ (a results archive's "
+                                    "suite folder, <variant>/<method>/seed<S>/)");
   std::vector<Run> out;
   std::vector<fs::path> variants;
   for (const auto& v : fs::directory_iterator(runs))
@@ -92,7 +97,9 @@ std::vector<Run> find_runs(const fs::path& suite) {
       }
     }
   }
-  if (out.empty()) throw InputError(runs.string(), "holds no complete run (runs/<variant>/<method>/seed<S>/results.json)");
+  if (out.empty())
+    throw InputError(runs.string(), std::string("holds no complete run (") +
+                                        (*archive ? "<variant>" : "runs/<variant>") + "/<method>/seed<S>/results.json)");
   return out;
 }
 
@@ -127,7 +134,8 @@ Json marked(Json cell, const CellStats& s) {
   return cell;
 }
 
-Json quality_table(const LeaderboardTable& t, const std::string& id, const std::string& to_suite, const VariantOf* variant_of) {
+// to_runs: the relative path from the report to the folder of the runs' variants.
+Json quality_table(const LeaderboardTable& t, const std::string& id, const std::string& to_runs, const VariantOf* variant_of) {
   Json columns = Json::array({{{"key", "method"}, {"label", "method"}}});
   std::vector<std::string> groups = t.scenes;
   groups.push_back(t.average_label);
@@ -147,7 +155,7 @@ Json quality_table(const LeaderboardTable& t, const std::string& id, const std::
       std::string link;
       if (!avg && variant_of && s.n > 0)
         if (auto it = variant_of->find({t.scenes[g], t.weather}); it != variant_of->end())
-          link = to_suite + "runs/" + it->second + "/" + method + "/";
+          link = to_runs + it->second + "/" + method + "/";
       cells[groups[g] + ".psnr"] = marked(stat_cell(s.psnr, s.psnr_std, s.n, 2, link), s);
       cells[groups[g] + ".ssim"] = marked(stat_cell(s.ssim, s.ssim_std, s.n, 4, link), s);
       cells[groups[g] + ".lpips"] =
@@ -260,7 +268,8 @@ ReportSummary write_report(const ReportOptions& o) {
   o.validate();
   const fs::path suite = fs::absolute(o.suite_dir).lexically_normal();
   check_writable_destination(o.out_dir, "the report folder (-o)");
-  const std::vector<Run> runs = find_runs(suite);
+  bool archive = false;  // a results archive's suite folder: the runs' numbers, no images
+  const std::vector<Run> runs = find_runs(suite, &archive);
   std::vector<LoadedResults> loaded;
   for (const Run& r : runs) loaded.push_back(r.results);
   LeaderboardOptions board;
@@ -303,9 +312,10 @@ ReportSummary write_report(const ReportOptions& o) {
   int ti = 0;
   VariantOf variant_of;
   for (const Run& r : runs) variant_of[{r.results.results.scene, r.results.results.weather}] = r.variant;
+  const std::string to_runs = to_suite + (archive ? "" : "runs/");
   for (const LeaderboardTable& t : paper.quality)
-    tables.push_back(quality_table(t, "table-" + std::to_string(++ti), to_suite, &variant_of));
-  if (!paper.ablation.methods.empty()) tables.push_back(quality_table(paper.ablation, "table-ablation", to_suite, nullptr));
+    tables.push_back(quality_table(t, "table-" + std::to_string(++ti), to_runs, &variant_of));
+  if (!paper.ablation.methods.empty()) tables.push_back(quality_table(paper.ablation, "table-ablation", to_runs, nullptr));
   report["tables"] = tables;
   report["cost"] = cost_table(paper.cost);
 
@@ -320,6 +330,14 @@ ReportSummary write_report(const ReportOptions& o) {
       if (r->renders) vruns.push_back(r);
       else without_renders.push_back(r->method + " (seed " + std::to_string(r->seed) + ")");
     std::stable_partition(vruns.begin(), vruns.end(), [](const Run* r) { return !is_reference_method(r->method); });
+    ++summary.variants;
+    if (archive) {  // no datasets beside the records: the identity the runs record
+      const std::optional<ScoredDataset>& id = all_runs.front()->results.results.dataset_identity;
+      datasets.push_back({{"name", variant},
+                          {"ground_truth_sha256", all_runs.front()->results.results.sha256_ground_truth},
+                          {"dataset_identity", id ? Json(id->sha256) : Json()}});
+      continue;
+    }
     const fs::path data = suite / "data" / variant;
     if (!fs::exists(data / "dataset.json"))
       throw InputError(data.string(), "missing: the dataset of variant " + variant + " (the report shows its inputs and truth)");
@@ -410,7 +428,6 @@ ReportSummary write_report(const ReportOptions& o) {
     datasets.push_back({{"name", variant},
                         {"ground_truth_sha256", all_runs.front()->results.results.sha256_ground_truth},
                         {"dataset_identity", data_identity[variant]}});
-    ++summary.variants;
   }
   report["variants"] = variants;
 

@@ -44,7 +44,9 @@ struct ReportSummary {
 // records its dataset's identity was scored on other data than its variant's other runs or than
 // data/<variant>, or (unless allow_mixed_recipes) runs of mixed recipes (leaderboard.h). Runs that
 // record no identity are compared with each other only. A run without renders/test/ (restored from
-// the results archive) is in the tables, curves and cost but has no column of images.
+// the results archive) is in the tables, curves and cost but has no column of images. suite_dir may
+// also be a results archive's suite folder (<variant>/<method>/seed<S>/, no runs/ and no data/):
+// then the report has the tables, curves, cost and provenance, and no variant pages.
 ReportSummary write_report(const ReportOptions& options);
 
 // The 95% confidence interval's half-width of a mean over n values with sample standard deviation

@@ -225,6 +225,28 @@ TEST(Report, ArchivedRunsWithoutRendersAndMixedRecipes) {
   for (const Json& run : d.at("runs")) archived += run.at("archived").get<bool>();
   EXPECT_EQ(archived, 1);
   EXPECT_NE(d.at("tables").dump().find("box-blur"), std::string::npos);  // its numbers stay in the tables
+  // A results archive's suite folder (<variant>/<method>/seed<S>/, records only, no data/): the
+  // tables, the runs and their datasets' identities, no variant pages.
+  const std::string archive = tmp / "archive/quick";
+  for (const auto& e : fs::recursive_directory_iterator(suite + "/runs"))
+    if (e.path().filename() == "results.json") {
+      const fs::path cell = fs::path(archive) / fs::relative(e.path().parent_path(), suite + "/runs");
+      fs::create_directories(cell);
+      fs::copy_file(e.path(), cell / "results.json");
+    }
+  r = run_command(kBin + " --quiet report " + archive + " -o " + (tmp / "archive_report"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Json a = read_data_js(tmp / "archive_report");
+  EXPECT_TRUE(a.at("variants").empty());
+  EXPECT_EQ(a.at("runs").size(), 6u);
+  EXPECT_EQ(a.at("provenance").at("datasets").size(), 2u);
+  ASSERT_EQ(a.at("tables").size(), d.at("tables").size());
+  for (size_t t = 0; t < a.at("tables").size(); ++t)  // the same numbers, cell by cell (links aside)
+    for (size_t row = 0; row < a.at("tables")[t].at("rows").size(); ++row)
+      for (const auto& [key, cell] : a.at("tables")[t].at("rows")[row].at("cells").items())
+        EXPECT_EQ(cell.at("text"), d.at("tables")[t].at("rows")[row].at("cells").at(key).at("text")) << key;
+  const std::string link = a.at("tables")[0].at("rows")[0].at("cells").at("park.psnr").at("link");
+  EXPECT_TRUE(fs::is_directory(tmp / ("archive_report/" + link))) << link;
   // One seed of noise with another option: refused, naming it; marked when allowed.
   set_recipe(suite + "/runs/park_rain/noise/seed2/results.json", 7000);
   r = run_command(make_report);
