@@ -247,6 +247,9 @@ ArchiveStatus archive_status(const std::string& suite_dir, const ArchiveMatrix& 
     s.estimated_cells += c.estimated;
   }
   if (s.left_estimated) s.notes.push_back("Estimates: " + (matrix.estimate_source.empty() ? "none given" : matrix.estimate_source));
+  const std::set<ArchiveCell> listed(matrix.cells.begin(), matrix.cells.end());
+  for (const ArchivedRun& run : read_archive(suite_dir))
+    if (!listed.count(run.cell)) s.notes.push_back("archived but not in the matrix: " + run.cell.to_string());
   return s;
 }
 

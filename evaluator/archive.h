@@ -107,6 +107,7 @@ struct ArchiveStatus {
 // shares (recipe_across_datasets, no "dataset" key): then a run counts as done when its recipe
 // agrees on that part, and says that its dataset was not checked.
 using CurrentRecipe = std::function<Json(const ArchiveCell& cell)>;
+// Notes also every archived run the matrix does not list.
 ArchiveStatus archive_status(const std::string& suite_dir, const ArchiveMatrix& matrix, const CurrentRecipe& current);
 std::string render_archive_status(const ArchiveStatus& status);
 

@@ -135,6 +135,13 @@ TEST(ArchiveTest, StatusSaysDoneStaleOrMissingWithTheCpuHours) {
   EXPECT_NE(text.find("missing pool_snow nerf seed0  ~0.50 CPU-h (estimate)"), std::string::npos) << text;
   EXPECT_NE(text.find("done 1, stale 1, missing 5 of 7"), std::string::npos) << text;
   EXPECT_NE(text.find("note: oracle on rain only"), std::string::npos) << text;
+  // A run archived outside the matrix is noted.
+  ArchiveAddOptions extra;
+  extra.run_dir = make_run(tmp, "extra", "yard_rain", "3dgs", 0, recipe("3dgs"));
+  extra.suite_dir = suite;
+  archive_add(extra);
+  const std::string with_extra = render_archive_status(archive_status(suite, m, [](const ArchiveCell& c) { return recipe(c.method); }));
+  EXPECT_NE(with_extra.find("note: archived but not in the matrix: yard_rain 3dgs seed0"), std::string::npos) << with_extra;
   // A done cell whose dataset could not be checked says so.
   const ArchiveStatus unchecked = archive_status(suite, m, [](const ArchiveCell& c) { return recipe_across_datasets(recipe(c.method)); });
   EXPECT_EQ(unchecked.cells[0].state, CellStatus::State::kDone);
