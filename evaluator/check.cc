@@ -162,8 +162,9 @@ CheckReport check_regression(const std::vector<LoadedResults>& baseline, const s
                                  "; pass --allow-other-weights to compare anyway, or regenerate the baseline");
       o << "  note: other weights than the baseline (allowed): " << why << "\n";
     }
-    if (std::string why = provenance_mismatch(br.method_info, nr.method_info,
-                                              {"method", "method_description", "iterations", "schedule"});
+    // schedule_length beside iterations: a run shortened from another schedule length is another form.
+    if (std::string why = provenance_mismatch(
+            br.method_info, nr.method_info, {"method", "method_description", "iterations", "schedule", "schedule_length"});
         !why.empty()) {
       if (!options.allow_other_recipe)
         throw InputError(np, "made with another recipe than the baseline " + b->path + ": " + why +

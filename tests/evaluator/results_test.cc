@@ -249,7 +249,8 @@ TEST(CheckTest, EveryViewIsCheckedAsWellAsTheMean) {
 TEST(CheckTest, RefusesAnotherYardstickOtherWeightsOrAnotherRecipe) {
   Results b = make("wgs", "pool", "rain", 25.0, 0.85, 0.15);
   b.sha256_ground_truth = "aaaa";
-  b.method_info = {{"weights", {{"led", "1111"}}}, {"method_description", "recipe A"}, {"iterations", 1000}};
+  b.method_info = {{"weights", {{"led", "1111"}}}, {"method_description", "recipe A"}, {"iterations", 1000},
+                   {"schedule", "fast"}, {"schedule_length", 7500}};
   std::vector<LoadedResults> base = {{"base.json", b}};
   auto variant = [&](const std::function<void(Results&)>& f) {
     Results n = b;
@@ -264,6 +265,10 @@ TEST(CheckTest, RefusesAnotherYardstickOtherWeightsOrAnotherRecipe) {
   const auto other_weights = variant([](Results& n) { n.method_info["weights"]["led"] = "2222"; });
   const auto other_recipe = variant([](Results& n) { n.method_info["method_description"] = "recipe B"; });
   const auto longer = variant([](Results& n) { n.method_info["iterations"] = 2000; });
+  const auto other_schedule = variant([](Results& n) { n.method_info["schedule"] = "reference"; });
+  // The same 1000 iterations cut from another schedule length: another short form of the schedule.
+  const auto other_form = variant([](Results& n) { n.method_info["schedule_length"] = 6000; });
+  const auto unrecorded_form = variant([](Results& n) { n.method_info.erase("schedule_length"); });
   const auto unrecorded = variant([](Results& n) { n.method_info.erase("weights"); });
   for (const auto* c : {&other_weights, &unrecorded}) {
     try {
@@ -275,12 +280,21 @@ TEST(CheckTest, RefusesAnotherYardstickOtherWeightsOrAnotherRecipe) {
   }
   EXPECT_THROW(check_regression(base, other_recipe, o), InputError);
   EXPECT_THROW(check_regression(base, longer, o), InputError);
+  for (const auto* c : {&other_schedule, &other_form, &unrecorded_form}) {
+    try {
+      check_regression(base, *c, o);
+      ADD_FAILURE() << "accepted another schedule or form";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--allow-other-recipe"), std::string::npos) << e.what();
+    }
+  }
   o.allow_other_weights = true;
   o.allow_other_recipe = true;
   const CheckReport r = check_regression(base, other_weights, o);
   EXPECT_TRUE(r.passed);
   EXPECT_NE(r.text.find("other weights than the baseline (allowed)"), std::string::npos) << r.text;
   EXPECT_TRUE(check_regression(base, other_recipe, o).passed);
+  EXPECT_TRUE(check_regression(base, other_form, o).passed);
 }
 
 TEST(CheckTest, InfinitePsnrComparesSanely) {
