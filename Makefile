@@ -5,7 +5,7 @@ SHELL := /bin/bash
 BUILD ?= build
 JOBS ?= $(shell nproc)
 
-.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline regression-baseline clean training-data validation-data adapted-led-rule models archive-status archive-commit
+.PHONY: all deps configure build test test-slow test-slurm test-asan fuzz interop suite demo check-baseline regression-baseline clean training-data validation-data adapted-led-rule models archive-status archive-commit results
 
 all: build
 
@@ -110,6 +110,11 @@ ARCHIVE_DATA ?=
 archive-status: build
 	$(BUILD)/apps/weathergs archive status --root benchmarks/results --suite $(ARCHIVE_SUITE) \
 	  $(if $(ARCHIVE_DATA),--data $(ARCHIVE_DATA))
+# docs/results.md's tables from the committed archive (scripts/results-tables.sh): its state, the
+# paper's tables with intervals and the agreement with the paper, the curves (docs/images/results/).
+results: build
+	bash scripts/results-tables.sh $(BUILD)/apps/weathergs benchmarks/results/$(ARCHIVE_SUITE)
+
 archive-commit: build
 	git add -- benchmarks/results/$(ARCHIVE_SUITE)
 	git commit -m "results archive $(ARCHIVE_SUITE): $$($(BUILD)/apps/weathergs archive status --root benchmarks/results \

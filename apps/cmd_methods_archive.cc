@@ -48,9 +48,10 @@ methods::ReconstructOptions cell_options(const evaluator::ArchiveMatrix& m, cons
   methods::ReconstructOptions o;
   o.method = methods::parse_method(c.method, matrix_path + ": " + c.to_string());
   const methods::Recipe& r = methods::spec(o.method).recipe;
+  static const Json kNone = Json::object();  // a JsonReader keeps a pointer to its value: never a temporary
   auto options_of = [&](const char* backend) {
     const auto it = m.options.find(backend);
-    return JsonReader(it == m.options.end() ? Json::object() : it->second, matrix_path, std::string("/options/") + backend);
+    return JsonReader(it == m.options.end() ? kNone : it->second, matrix_path, std::string("/options/") + backend);
   };
   o.train = reconstruction::TrainOptions::from_user_json(options_of("3dgs"));
   o.nerf = nerf::NerfOptions::from_user_json(options_of("nerf"));

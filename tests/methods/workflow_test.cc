@@ -1,6 +1,6 @@
 // workflow/Snakefile end to end on the tiny profile: one variant, two methods, one seed; then a
 // re-run does nothing, a removed result is the only cell run again, and runs added to the results
-// archive are restored, not trained, once their folders are gone.
+// archive are restored, not trained, once their folders are gone, and `make results` tabulates them.
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -97,6 +97,11 @@ TEST(Workflow, TinySuiteRunsResumesAndRerunsOnlyWhatIsMissing) {
   EXPECT_EQ(log4.find("reconstruct: training"), std::string::npos) << log4;
   EXPECT_EQ(read_file(out + "/leaderboard.md"), board);
   EXPECT_TRUE(fs::exists(out + "/report/index.html"));  // the results browser, with the restored runs' numbers
+  // `make results` reads docs/results.md's tables from such an archive (the script's own checks).
+  const auto made = weathergs::testing::run_command("bash " + src + "/tests/methods/results_tables_test.sh " +
+                                                    WEATHERGS_BINARY + " " + (tmp / "tables") + " " + src + " " +
+                                                    archive + "/tiny");
+  EXPECT_EQ(made.exit_code, 0) << made.output;
 }
 
 // `iterations: fast` (a dry run): no --iterations, the curve as fractions of each run's own length,
