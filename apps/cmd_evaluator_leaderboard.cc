@@ -13,7 +13,7 @@ namespace {
 
 struct LeaderboardArgs {
   std::vector<std::string> results;
-  std::string format = "md", output, against_paper;
+  std::string format = "md", output, against_paper, note;
   bool paper = false;
   bool allow_mixed_data = false;
   bool allow_mixed_recipes = false;
@@ -21,6 +21,8 @@ struct LeaderboardArgs {
 
 int run_leaderboard(const LeaderboardArgs& args) {
   const evaluator::TableFormat format = evaluator::parse_table_format(args.format);
+  if (!args.note.empty() && format == evaluator::TableFormat::kCsv)  // before reading every result
+    throw InputError("--note", "a CSV table holds data only, with no place for a note: use --format md, latex or html");
   std::optional<evaluator::PublishedTables> published;
   if (!args.against_paper.empty()) {
     if (format != evaluator::TableFormat::kMarkdown)
@@ -35,10 +37,10 @@ int run_leaderboard(const LeaderboardArgs& args) {
   std::string text;
   if (args.paper || published) {
     const evaluator::PaperTables tables = evaluator::build_paper_tables(loaded, options);
-    text = evaluator::render_paper_tables(tables, format);
+    text = evaluator::render_paper_tables(tables, format, args.note);
     if (published) text += evaluator::render_agreement(tables, *published);
   } else {
-    text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded, options), format);
+    text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded, options), format, args.note);
   }
   if (args.output.empty() || args.output == "-") {
     std::fputs(text.c_str(), stdout);
@@ -64,6 +66,10 @@ Command make_leaderboard(CLI::App& root) {
                   "(benchmarks/paper_tables.json): rankings with Kendall's tau, each reading reproduced or not "
                   "(implies --paper; Markdown only)")
       ->check(CLI::ExistingFile);
+  sub->add_option("--note", args->note,
+                  "What the tables are, e.g. 'A smoke run at 1000 iterations, not converged; the converged tables: "
+                  "docs/results.md': the first paragraph under the title (md, html), comment lines (latex); refused "
+                  "with csv, which holds data only");
   sub->add_flag("--allow-mixed-data", args->allow_mixed_data,
                 "Tabulate results of one variant scored on datasets of different identities (refused, exit 2, "
                 "otherwise), marking their cells with a dagger and a note naming the identities");

@@ -15,10 +15,19 @@ struct ReportArgs {
   CLI::App* sub = nullptr;
 };
 
+// A word as a POSIX shell reads it back (the command shown under provenance).
+std::string shell_quoted(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 int run(ReportArgs& a) {
   a.options.command = "weathergs report " + a.options.suite_dir + " -o " + a.options.out_dir +
                       (a.options.allow_mixed_data ? " --allow-mixed-data" : "") +
-                      (a.options.allow_mixed_recipes ? " --allow-mixed-recipes" : "");
+                      (a.options.allow_mixed_recipes ? " --allow-mixed-recipes" : "") +
+                      (a.options.converged_dir.empty() ? "" : " --converged " + a.options.converged_dir) +
+                      (a.options.note.empty() ? "" : " --note " + shell_quoted(a.options.note));
   // The LPIPS weights the scores were made with are this installation's (results record the
   // protocol's name, not the file).
   try {
@@ -28,8 +37,12 @@ int run(ReportArgs& a) {
     // A report can be made where LPIPS is not installed; provenance then lists the runs' own weights.
   }
   const evaluator::ReportSummary s = evaluator::write_report(a.options);
-  std::printf("report: %d variants, %d runs, %d test views, %d images, %.1f MB\nopen %s\n", s.variants, s.runs, s.views,
-              s.images, double(s.bytes) / 1e6, s.index.c_str());
+  std::printf("report: %d variants, %d runs, %d test views, %d images, %.1f MB\n", s.variants, s.runs, s.views, s.images,
+              double(s.bytes) / 1e6);
+  if (!a.options.converged_dir.empty())
+    std::printf("converged (archive): %d runs of these variants from %s (the page's section 'Converged (archive)')\n",
+                s.converged_runs, a.options.converged_dir.c_str());
+  std::printf("open %s\n", s.index.c_str());
   return kExitOk;
 }
 
@@ -49,6 +62,13 @@ Command make(CLI::App& root) {
   sub->add_flag("--allow-mixed-recipes", a->options.allow_mixed_recipes,
                 "Show runs whose recipes differ where they must agree (as leaderboard --allow-mixed-recipes; refused, "
                 "exit 2, otherwise), marked with a double dagger");
+  sub->add_option("--converged", a->options.converged_dir,
+                  "A results archive's suite folder (e.g. benchmarks/results/quick): a section 'Converged (archive)' "
+                  "with its runs of this suite's variants in the same tables, beside the suite's and never mixed "
+                  "into them, and how many cells of its matrix.json hold a run (said plainly when none)");
+  sub->add_option("--note", a->options.note,
+                  "What the suite is, e.g. 'A smoke run at 1000 iterations, not converged', shown at the top of the "
+                  "page");
   a->sub = sub;
   return {sub, [a] { return run(*a); }};
 }

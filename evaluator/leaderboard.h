@@ -134,7 +134,11 @@ bool is_reference_method(const std::string& method);
 // a dataset unless options allow mixing (InputError naming files).
 std::vector<LeaderboardTable> build_leaderboard(const std::vector<LoadedResults>& results,
                                                 const LeaderboardOptions& options = {});
-std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format);
+// note: what the table set is, e.g. "a smoke run at 1000 iterations, not converged" (empty: none): the
+// first paragraph under the title in Markdown and HTML, comment lines in LaTeX. CSV holds data only:
+// a note there is an InputError.
+std::string render_leaderboard(const std::vector<LeaderboardTable>& tables, TableFormat format,
+                               const std::string& note = "");
 
 // Mean and population standard deviation of x (NaN for none); an infinite value (PSNR of identical
 // images) makes the mean +inf and the spread 0.
@@ -142,7 +146,7 @@ void mean_std(const std::vector<double>& x, double& mean, double& sd);
 
 // Pieces of render_leaderboard for documents that add their own tables (evaluator/paper_tables.h).
 std::string render_table(const LeaderboardTable& table, TableFormat format, bool csv_header);
-std::string document_begin(TableFormat format, const std::string& title);
+std::string document_begin(TableFormat format, const std::string& title, const std::string& note = "");
 std::string document_end(TableFormat format);
 std::string csv_escape(const std::string& s);
 std::string latex_escape(const std::string& s);

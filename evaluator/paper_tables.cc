@@ -464,8 +464,8 @@ std::string render_differences(const std::vector<PairedDifference>& rows, const 
 
 }  // namespace
 
-std::string render_paper_tables(const PaperTables& t, TableFormat format) {
-  std::string o = document_begin(format, "WeatherGS benchmark: the paper's tables");
+std::string render_paper_tables(const PaperTables& t, TableFormat format, const std::string& note) {
+  std::string o = document_begin(format, "WeatherGS benchmark: the paper's tables", note);
   auto separate = [&] { if (format == TableFormat::kCsv && !o.empty()) o += "\n"; };
   for (const auto& q : t.quality) {
     separate();

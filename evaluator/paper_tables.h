@@ -53,6 +53,7 @@ struct PaperTables {
 };
 
 PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const LeaderboardOptions& options = {});
-std::string render_paper_tables(const PaperTables& tables, TableFormat format);
+// note: what the table set is (render_leaderboard's).
+std::string render_paper_tables(const PaperTables& tables, TableFormat format, const std::string& note = "");
 
 }  // namespace weathergs::evaluator

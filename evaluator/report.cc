@@ -16,6 +16,7 @@
 #include "core/image.h"
 #include "core/json_reader.h"
 #include "core/version.h"
+#include "evaluator/archive.h"
 #include "evaluator/paper_tables.h"
 #include "evaluator/recipe.h"
 #include "evaluator/report_assets.h"
@@ -54,18 +55,18 @@ struct Run {
   bool renders = false;
 };
 
-// A suite's runs: <suite>/runs/<variant>/<method>/seed<S>/, or, in a results archive's suite folder
-// (`archive` set: no runs/, no data/), <suite>/<variant>/<method>/seed<S>/.
-std::vector<Run> find_runs(const fs::path& suite, bool* archive) {
-  *archive = fs::is_directory(suite) && !fs::exists(suite / "runs") && !fs::exists(suite / "data");
-  const fs::path runs = *archive ? suite : suite / "runs";
-  if (!fs::is_directory(runs))
-    throw InputError(runs.string(), "missing: a suite folder has runs/<variant>/<method>/seed<S>/ (a results archive's "
-                                    "suite folder, <variant>/<method>/seed<S>/)");
+// A results archive's suite folder: <variant>/<method>/seed<S>/ with no runs/ and no data/.
+bool is_archive_suite(const fs::path& dir) {
+  return fs::is_directory(dir) && !fs::exists(dir / "runs") && !fs::exists(dir / "data");
+}
+
+// Every complete run under <runs>/<variant>/<method>/seed<S>/results.json (none: empty), of the
+// variants in `only` where given.
+std::vector<Run> collect_runs(const fs::path& runs, const std::set<std::string>* only = nullptr) {
   std::vector<Run> out;
   std::vector<fs::path> variants;
   for (const auto& v : fs::directory_iterator(runs))
-    if (v.is_directory()) variants.push_back(v.path());
+    if (v.is_directory() && (!only || only->count(v.path().filename().string()))) variants.push_back(v.path());
   std::sort(variants.begin(), variants.end());
   for (const fs::path& v : variants) {
     std::vector<fs::path> methods;
@@ -97,6 +98,18 @@ std::vector<Run> find_runs(const fs::path& suite, bool* archive) {
       }
     }
   }
+  return out;
+}
+
+// A suite's runs: <suite>/runs/<variant>/<method>/seed<S>/, or, in a results archive's suite folder
+// (`archive` set), <suite>/<variant>/<method>/seed<S>/.
+std::vector<Run> find_runs(const fs::path& suite, bool* archive) {
+  *archive = is_archive_suite(suite);
+  const fs::path runs = *archive ? suite : suite / "runs";
+  if (!fs::is_directory(runs))
+    throw InputError(runs.string(), "missing: a suite folder has runs/<variant>/<method>/seed<S>/ (a results archive's "
+                                    "suite folder, <variant>/<method>/seed<S>/)");
+  std::vector<Run> out = collect_runs(runs);
   if (out.empty())
     throw InputError(runs.string(), std::string("holds no complete run (") +
                                         (*archive ? "<variant>" : "runs/<variant>") + "/<method>/seed<S>/results.json)");
@@ -262,6 +275,102 @@ Json metrics_json(const MetricValues& m) {
   return {{"psnr", number(m.psnr)}, {"ssim", number(m.ssim)}, {"lpips", m.lpips ? number(*m.lpips) : Json(nullptr)}};
 }
 
+std::string joined(const std::set<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+// The results archive's runs of the suite's variants (ReportOptions::converged_dir) as a section of
+// their own: a table holds one recipe, and the archive's (the fast schedule) is not the suite's.
+// suite_identity: variant -> the sha256 of the suite's data/<variant>, where the suite has one.
+Json converged_section(const ReportOptions& o, const fs::path& final_out, const std::set<std::string>& variants,
+                       const std::map<std::string, std::string>& suite_identity, const LeaderboardOptions& board,
+                       int* shown) {
+  const fs::path dir = fs::absolute(o.converged_dir).lexically_normal();
+  if (!fs::is_directory(dir))
+    throw InputError(o.converged_dir, "missing: --converged expects a results archive's suite folder (<root>/<suite>, "
+                                      "e.g. benchmarks/results/quick)");
+  if (!is_archive_suite(dir))
+    throw InputError(o.converged_dir, "holds runs/ or data/: a suite folder, not a results archive's suite folder "
+                                      "(<variant>/<method>/seed<S>/; docs/archive.md)");
+  const std::vector<Run> runs = collect_runs(dir, &variants);
+  *shown = int(runs.size());
+  std::string link = fs::relative(dir, final_out).generic_string();  // relative: the two can move together
+  link = link.empty() || link == "." ? "" : link + "/";
+  Json c{{"path", o.converged_dir}, {"link", link}, {"variants", Json(std::vector<std::string>(variants.begin(), variants.end()))},
+         {"runs", runs.size()}, {"tables", Json::array()}};
+  Json lines = Json::array();
+
+  // How far the archive's matrix is: cells that hold a run (whether each is current with this build's
+  // recipes is `weathergs archive status`'s to say: it needs the methods' weights and datasets).
+  const fs::path matrix_path = dir / "matrix.json";
+  std::string matrix_line;
+  if (fs::exists(matrix_path)) {
+    const ArchiveMatrix m = read_archive_matrix(matrix_path.string());
+    int archived = 0, variant_cells = 0, variant_archived = 0;
+    for (const ArchiveCell& cell : m.cells) {
+      const bool held = fs::exists(fs::path(cell.dir(dir.string())) / kArchiveResultsFile);
+      archived += held;
+      if (variants.count(cell.variant)) {
+        ++variant_cells;
+        variant_archived += held;
+      }
+    }
+    c["matrix"] = {{"cells", m.cells.size()}, {"archived", archived}, {"variant_cells", variant_cells},
+                   {"variant_archived", variant_archived}};
+    matrix_line = "Its matrix (matrix.json): " + std::to_string(archived) + " of " + std::to_string(m.cells.size()) +
+                  " cells archived; " + std::to_string(variant_archived) + " of the " + std::to_string(variant_cells) +
+                  " on " + joined(variants) + ". Which are current with this build's recipes: weathergs archive status.";
+  }
+  if (runs.empty()) {
+    c["message"] = "The results archive " + o.converged_dir + " holds no run of " + joined(variants) +
+                   " yet: no converged tables to show.";
+    if (!matrix_line.empty()) lines.push_back(matrix_line);
+    c["lines"] = lines;
+    return c;
+  }
+  std::vector<LoadedResults> loaded;
+  for (const Run& r : runs) loaded.push_back(r.results);
+  const PaperTables paper = build_paper_tables(loaded, board);  // the archive's own runs must agree
+  std::set<std::string> methods, held, lacking = variants;
+  for (const Run& r : runs) {
+    methods.insert(r.method);
+    held.insert(r.variant);
+    lacking.erase(r.variant);
+  }
+  lines.push_back("The runs of the results archive " + o.converged_dir + " on " + joined(held) + ": " +
+                  std::to_string(runs.size()) + " runs of " + std::to_string(methods.size()) + " methods" +
+                  (lacking.empty() ? "" : " (none yet on " + joined(lacking) + ")") +
+                  ". Tables of their own, never mixed into this suite's rows: one table holds one recipe "
+                  "(docs/archive.md).");
+  if (!matrix_line.empty()) lines.push_back(matrix_line);
+  // Whether the archive's numbers were scored on the very datasets this suite's were.
+  std::map<std::string, std::string> archive_identity;  // variant -> the first run's recorded identity
+  for (const Run& r : runs)
+    if (!archive_identity.count(r.variant))
+      archive_identity[r.variant] = r.results.results.dataset_identity ? r.results.results.dataset_identity->sha256 : "";
+  std::string same, other;
+  for (const auto& [variant, id] : archive_identity) {
+    const auto it = suite_identity.find(variant);
+    if (it == suite_identity.end() || id.empty()) continue;
+    if (id == it->second) same += (same.empty() ? "" : ", ") + variant;
+    else other += (other.empty() ? "" : "; ") + variant + " (" + id.substr(0, 12) + " against " + it->second.substr(0, 12) + ")";
+  }
+  if (!same.empty()) lines.push_back("Scored on the same datasets as this suite's: " + same + ".");
+  if (!other.empty()) lines.push_back("Scored on other datasets than this suite's: " + other + ".");
+  VariantOf variant_of;
+  for (const Run& r : runs) variant_of[{r.results.results.scene, r.results.results.weather}] = r.variant;
+  int ti = 0;
+  for (const LeaderboardTable& t : paper.quality)
+    c["tables"].push_back(quality_table(t, "converged-table-" + std::to_string(++ti), link, &variant_of));
+  if (!paper.ablation.methods.empty())
+    c["tables"].push_back(quality_table(paper.ablation, "converged-table-ablation", link, nullptr));
+  c["cost"] = cost_table(paper.cost);
+  c["lines"] = lines;
+  return c;
+}
+
 }  // namespace
 
 ReportSummary write_report(const ReportOptions& o) {
@@ -299,15 +408,24 @@ ReportSummary write_report(const ReportOptions& o) {
     other_data.insert(&r);
   }
 
-  AtomicDirectory dir(o.out_dir);
-  const fs::path out(dir.path());
   // Links from the report into the suite (the runs' folders), relative so that both can move together.
   const fs::path final_out = fs::absolute(o.out_dir).lexically_normal();
+  ReportSummary summary;
+  Json converged;  // read before anything is written: a bad archive leaves nothing
+  if (!o.converged_dir.empty()) {
+    std::set<std::string> variants;
+    for (const Run& r : runs) variants.insert(r.variant);
+    converged = converged_section(o, final_out, variants, data_identity, board, &summary.converged_runs);
+  }
+
+  AtomicDirectory dir(o.out_dir);
+  const fs::path out(dir.path());
   std::string to_suite = fs::relative(suite, final_out).generic_string();
   to_suite = to_suite.empty() || to_suite == "." ? "" : to_suite + "/";
 
-  ReportSummary summary;
   Json report{{"format", "weathergs-report"}, {"version", 1}, {"title", "weathergs results: " + suite.filename().string()}};
+  if (!o.note.empty()) report["note"] = o.note;
+  if (!converged.is_null()) report["converged"] = converged;
   Json tables = Json::array();
   int ti = 0;
   VariantOf variant_of;

@@ -30,11 +30,21 @@ struct ReportOptions {
   bool allow_mixed_data = false;
   // Runs whose recipes differ where they must agree (find_mixed_recipes): marked instead of refused.
   bool allow_mixed_recipes = false;
+  // A results archive's suite folder (<root>/<suite>, e.g. benchmarks/results/quick; docs/archive.md),
+  // empty for none: its runs of the suite's variants get a section of their own, "Converged (archive)",
+  // with the same tables, how many cells of its matrix.json hold a run, and whether they were scored on
+  // the suite's datasets; said plainly when it holds no run of them. Never mixed into the suite's rows:
+  // a table holds one recipe, and a smoke run's is not the archive's.
+  std::string converged_dir;
+  // What the suite is, e.g. "A smoke run at 1000 iterations, not converged" (empty: none): shown at the
+  // top of the page.
+  std::string note;
   void validate() const;  // InputError naming the field
 };
 
 struct ReportSummary {
   int variants = 0, runs = 0, views = 0, images = 0;
+  int converged_runs = 0;  // the archive's runs shown beside (ReportOptions::converged_dir)
   int64_t bytes = 0;  // the whole REPORT_DIR
   std::string index;  // REPORT_DIR/index.html
 };
@@ -46,7 +56,10 @@ struct ReportSummary {
 // record no identity are compared with each other only. A run without renders/test/ (restored from
 // the results archive) is in the tables, curves and cost but has no column of images. suite_dir may
 // also be a results archive's suite folder (<variant>/<method>/seed<S>/, no runs/ and no data/):
-// then the report has the tables, curves, cost and provenance, and no variant pages.
+// then the report has the tables, curves, cost and provenance, and no variant pages. converged_dir:
+// InputError when it is missing, is a suite folder (runs/, data/), or its runs of the suite's
+// variants are unreadable or of mixed recipes (unless allow_mixed_recipes); its runs of other
+// variants are not read.
 ReportSummary write_report(const ReportOptions& options);
 
 // The 95% confidence interval's half-width of a mean over n values with sample standard deviation

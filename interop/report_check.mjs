@@ -131,6 +131,7 @@ try {
     }
   };
   for (const t of data.tables || []) checkTable(t.id, t);
+  for (const t of (data.converged || {}).tables || []) checkTable(t.id, t);  // the archive's, beside
   if (data.cost && (data.cost.rows || []).length) checkTable('cost', data.cost);
 
   // Sorting: a numeric column of the first leaderboard table, ascending then descending (or the

@@ -382,6 +382,21 @@
     ];
   }
 
+  // The results archive's converged runs of this report's variants: the same tables, apart from the
+  // report's own (a table holds one recipe), or a plain sentence when the archive holds none.
+  function convergedSection(c) {
+    const lines = (c.lines || []).map((line) => el('p', { class: 'note' }, line));
+    const where = el('p', { class: 'muted' }, 'Archive: ', c.link ? el('a', { href: url(c.link) }, el('code', null, c.path)) : el('code', null, c.path));
+    if (!(c.tables || []).length)
+      return [where, el('p', { class: 'empty-archive', 'data-converged-empty': '' }, c.message || 'The archive holds no run of these variants.'), lines];
+    return [
+      where, lines,
+      leaderboardSection(c.tables),
+      el('h3', null, 'Cost'),
+      c.cost && (c.cost.rows || []).length ? sortableTable('converged-cost', c.cost) : el('p', { class: 'muted' }, 'No cost table.'),
+    ];
+  }
+
   function provenanceSection(p) {
     // One row per entry: its name, then one column per [key, header].
     const hashes = (list, columns) => (list && list.length
@@ -416,16 +431,22 @@
     document.getElementById('title').textContent = data.title;
   }
 
+  // What this suite is (e.g. a smoke run, not converged), above everything.
+  if (data.note)
+    main.append(el('p', { class: 'run-note', id: 'run-note' }, data.note,
+      data.converged ? [' ', el('a', { href: '#converged' }, 'The converged tables: Converged (archive).')] : null));
+
   const variants = data.variants || [];
   const sections = [
     ['leaderboard', 'Leaderboard', () => leaderboardSection(data.tables || [])],
+    data.converged ? ['converged', 'Converged (archive)', () => convergedSection(data.converged)] : null,
     ...variants.map((v) => [`variant-${v.name}`, v.name, () => variantSection(v)]),
     ['curves', 'Curves', () => curvesSection(data.curves || [], variants)],
     ['cost', 'Cost', () => costSection(data.cost, data.runs || [])],
     ['provenance', 'Provenance', () => provenanceSection(data.provenance || {})],
   ];
   const nav = document.getElementById('nav');
-  for (const [id, label, draw] of sections) {
+  for (const [id, label, draw] of sections.filter(Boolean)) {
     nav.append(el('a', { href: `#${encodeURIComponent(id)}` }, label));
     main.append(el('section', { id }, el('h2', null, label), draw()));
   }

@@ -240,6 +240,18 @@ TEST_F(EvaluatorCli, LeaderboardAndCheckRoundTrip) {
     EXPECT_NE(text.find("yard"), std::string::npos) << fmt;
     EXPECT_NE(text.find("noise"), std::string::npos) << fmt;
   }
+  // --note: under the title (md, html), a comment (latex); refused with csv before anything is written.
+  const std::string note = "A smoke run at 1000 iterations, not converged";
+  for (const char* fmt : {"md", "latex", "html"}) {
+    const std::string out = dir / (std::string("noted.") + fmt);
+    auto r = run_command(kBin + " leaderboard" + all + " --paper --format " + fmt + " --note '" + note + "' -o " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(read_file(out).find(std::string(fmt) == "latex" ? "% " + note + "\n" : note), std::string::npos) << fmt;
+  }
+  auto noted_csv = run_command(kBin + " leaderboard" + all + " --format csv --note '" + note + "' -o " + (dir / "noted.csv"));
+  EXPECT_EQ(noted_csv.exit_code, 2) << noted_csv.output;
+  EXPECT_NE(noted_csv.output.find("--note"), std::string::npos) << noted_csv.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "noted.csv"));
   std::string md = read_file(dir / "board.md");
   EXPECT_NE(md.find("## Weather: Rain"), std::string::npos) << md;
   EXPECT_NE(md.find("## Weather: Snow"), std::string::npos) << md;

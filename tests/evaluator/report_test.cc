@@ -261,5 +261,114 @@ TEST(Report, ArchivedRunsWithoutRendersAndMixedRecipes) {
   EXPECT_NE(d.at("tables").dump().find("‡"), std::string::npos);
 }
 
+// A results archive's suite folder of copies of the suite's results.json: the cells given as
+// "<variant>/<method>/seed<S>" (the archive's own variant may differ from the run it copies).
+void archive_copies(const std::string& suite, const std::string& archive,
+                    const std::vector<std::pair<std::string, std::string>>& cells) {
+  for (const auto& [from, to] : cells) {
+    fs::create_directories(archive + "/" + to);
+    fs::copy_file(suite + "/runs/" + from + "/results.json", archive + "/" + to + "/results.json");
+  }
+}
+
+// --converged ARCHIVE: the archive's runs of the suite's variants in tables of their own (never mixed
+// into the suite's: those stay byte for byte what they are without it), how many cells of its matrix
+// hold a run, whether they were scored on the suite's datasets; --note at the top of the page.
+TEST(Report, ConvergedTablesFromTheArchiveBesideTheSuite) {
+  TempDir tmp;
+  const std::string suite = make_suite(tmp), archive = tmp / "results/quick";
+  auto r = run_command(kBin + " --quiet report " + suite + " -o " + (tmp / "plain"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Json plain = read_data_js(tmp / "plain");
+  EXPECT_FALSE(plain.contains("converged") || plain.contains("note"));
+  // Two runs of park_rain, and one of a variant the suite does not have (not shown, not even read).
+  archive_copies(suite, archive, {{"park_rain/box-blur/seed0", "park_rain/box-blur/seed0"},
+                                  {"park_rain/noise/seed1", "park_rain/noise/seed0"},
+                                  {"park_snow/noise/seed1", "yard_snow/noise/seed0"}});
+  write_file_atomic(archive + "/yard_snow/noise/seed0/results.json", "not json: never read");
+  write_file_atomic(archive + "/matrix.json",
+                    Json{{"format", "weathergs-archive-matrix"}, {"version", 1}, {"suite", "quick"},
+                         {"variants", {"park_rain", "park_snow", "yard_snow"}},
+                         {"groups", {{{"methods", {"box-blur", "noise"}}, {"seeds", {0, 1}}}}}}.dump());
+  const std::string note = "A smoke run at 150 iterations, not converged: the converged tables are in the archive.";
+  const std::string report = tmp / "report";
+  r = run_command(kBin + " --quiet report " + suite + " -o " + report + " --converged " + archive + " --note '" + note + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("converged (archive): 2 runs"), std::string::npos) << r.output;
+  const Json d = read_data_js(report);
+  EXPECT_EQ(d.at("note"), note);
+  EXPECT_EQ(d.at("tables"), plain.at("tables"));  // the suite's own rows are untouched
+  EXPECT_EQ(d.at("runs").size(), plain.at("runs").size());
+  const Json& c = d.at("converged");
+  EXPECT_EQ(c.at("path"), archive);
+  EXPECT_EQ(c.at("runs"), 2);
+  EXPECT_EQ(c.at("variants"), Json::array({"park_rain", "park_snow"}));
+  // 3 variants x 2 methods x 2 seeds; on park_rain and park_snow 8, of which box-blur seed0 and noise
+  // seed0 of park_rain hold a run.
+  EXPECT_EQ(c.at("matrix"), (Json{{"cells", 12}, {"archived", 3}, {"variant_cells", 8}, {"variant_archived", 2}}));
+  EXPECT_NE(c.at("lines").dump().find("3 of 12 cells archived; 2 of the 8 on park_rain, park_snow"), std::string::npos)
+      << c.at("lines").dump();
+  EXPECT_NE(c.at("lines").dump().find("the same datasets as this suite's: park_rain"), std::string::npos)
+      << c.at("lines").dump();
+  EXPECT_NE(c.at("lines").dump().find("on park_rain: 2 runs of 2 methods (none yet on park_snow)"), std::string::npos)
+      << c.at("lines").dump();
+  EXPECT_FALSE(c.contains("message"));
+  // One table (rain), the same layout; box-blur's one run is the suite's, cell for cell; noise's one
+  // archived run is not averaged with the suite's two.
+  ASSERT_EQ(c.at("tables").size(), 1u);
+  const Json& t = c.at("tables")[0];
+  EXPECT_EQ(t.at("id"), "converged-table-1");
+  const Json* suite_rain = nullptr;
+  // The same weather's table of the suite (its numeral may differ: the suite has snow too).
+  const auto weather_of = [](const Json& table) {
+    const std::string title = table.at("title");
+    return title.substr(title.find(": ") + 2);
+  };
+  for (const Json& st : d.at("tables"))
+    if (st.at("title").get<std::string>().rfind("Table", 0) == 0 && st.at("title").get<std::string>().find(": ") != std::string::npos &&
+        weather_of(st) == weather_of(t))
+      suite_rain = &st;
+  ASSERT_NE(suite_rain, nullptr) << t.at("title");
+  EXPECT_EQ(t.at("columns"), suite_rain->at("columns"));
+  ASSERT_EQ(t.at("rows").size(), 2u);
+  for (const Json& row : t.at("rows")) {
+    const Json& cells = row.at("cells");
+    if (row.at("method") == "box-blur") {
+      for (const Json& srow : suite_rain->at("rows"))
+        if (srow.at("method") == "box-blur") EXPECT_EQ(cells.at("park.psnr").at("text"), srow.at("cells").at("park.psnr").at("text"));
+    } else {
+      EXPECT_EQ(cells.at("park.psnr").at("n"), 1);
+      const Results seed1 = read_results(suite + "/runs/park_rain/noise/seed1/results.json");
+      EXPECT_EQ(cells.at("park.psnr").at("value").get<double>(), seed1.metrics.psnr);
+    }
+    const std::string link = cells.at("park.psnr").at("link");  // into the archive, relative
+    EXPECT_TRUE(fs::exists(report + "/" + link + "seed0/results.json")) << link;
+  }
+  EXPECT_EQ(c.at("cost").at("rows").size(), 2u);
+  EXPECT_NE(d.at("provenance").at("command").get<std::string>().find("--converged " + archive + " --note '"), std::string::npos);
+
+  // An archive that holds no run of these variants yet: said plainly, no table.
+  const std::string fresh = tmp / "fresh/quick";
+  archive_copies(suite, fresh, {{"park_snow/noise/seed1", "yard_snow/noise/seed0"}});
+  fs::copy_file(archive + "/matrix.json", fresh + "/matrix.json");
+  r = run_command(kBin + " --quiet report " + suite + " -o " + report + " --converged " + fresh);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Json e = read_data_js(report).at("converged");
+  EXPECT_EQ(e.at("runs"), 0);
+  EXPECT_TRUE(e.at("tables").empty());
+  EXPECT_EQ(e.at("message"), "The results archive " + fresh + " holds no run of park_rain, park_snow yet: no converged tables to show.");
+  EXPECT_EQ(e.at("matrix").at("variant_archived"), 0);
+  EXPECT_EQ(e.at("matrix").at("archived"), 1);
+
+  // Refused before anything is written: a missing folder, and a suite folder instead of an archive's.
+  fs::remove_all(report);
+  for (const std::string& bad : {std::string(tmp / "none"), suite}) {
+    r = run_command(kBin + " --quiet report " + suite + " -o " + report + " --converged " + bad);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find(bad), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(report));
+  }
+}
+
 }  // namespace
 }  // namespace weathergs::evaluator

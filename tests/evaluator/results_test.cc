@@ -101,6 +101,29 @@ TEST(LeaderboardTest, TablesPerWeatherBestAndAverage) {
   EXPECT_EQ(html.find("<script src"), std::string::npos);
 }
 
+// A note says what the tables are (a smoke run, not converged): the first paragraph under the title
+// in Markdown and HTML (escaped), comment lines in LaTeX (so that the tables \input into a paper print
+// nothing more); CSV holds data only and refuses one; without a note nothing changes.
+TEST(LeaderboardTest, ANoteSaysWhatTheTablesAre) {
+  const auto tables = build_leaderboard(paper_like());
+  const std::string note = "A smoke run at 1000 iterations, not converged: see <docs/results.md> & the archive.";
+  const std::string md = render_leaderboard(tables, TableFormat::kMarkdown, note);
+  EXPECT_EQ(md.rfind("# Leaderboard\n\n" + note + "\n\n## Weather: Snow", 0), 0u) << md;
+  const std::string html = render_leaderboard(tables, TableFormat::kHtml, note);
+  const std::string escaped = "<p class=\"run-note\">A smoke run at 1000 iterations, not converged: see "
+                              "&lt;docs/results.md&gt; &amp; the archive.</p>\n";
+  EXPECT_NE(html.find("<h1>Leaderboard</h1>\n" + escaped), std::string::npos) << html;
+  const std::string tex = render_leaderboard(tables, TableFormat::kLatex, "line one\nline two");
+  EXPECT_NE(tex.find("booktabs,graphicx}\n% line one\n% line two\n"), std::string::npos) << tex;
+  EXPECT_THROW(render_leaderboard(tables, TableFormat::kCsv, note), InputError);
+  for (TableFormat f : {TableFormat::kMarkdown, TableFormat::kCsv, TableFormat::kLatex, TableFormat::kHtml})
+    EXPECT_EQ(render_leaderboard(tables, f, ""), render_leaderboard(tables, f)) << int(f);
+  // The paper's tables take the same note.
+  const std::string paper = render_paper_tables(build_paper_tables(paper_like()), TableFormat::kMarkdown, note);
+  EXPECT_EQ(paper.rfind("# WeatherGS benchmark: the paper's tables\n\n" + note + "\n\n## Table I", 0), 0u) << paper;
+  EXPECT_THROW(render_paper_tables(build_paper_tables(paper_like()), TableFormat::kCsv, note), InputError);
+}
+
 // The oracle is an upper bound, not a competitor: every format shows it as a reference line and
 // never bolds it, as the paper's tables do.
 TEST(LeaderboardTest, TheOracleIsAReferenceLineInEveryFormat) {
