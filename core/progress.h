@@ -17,6 +17,10 @@ double peak_rss_mb();
 // Wall-clock seconds elapsed since t (steady clock).
 double seconds_since(std::chrono::steady_clock::time_point t);
 
+// CPU seconds this process has used so far, every thread's (CLOCK_PROCESS_CPUTIME_ID): unlike wall
+// time, a one-thread job's CPU seconds do not grow when other jobs share the cores.
+double process_cpu_seconds();
+
 void set_quiet(bool quiet);
 bool is_quiet();
 

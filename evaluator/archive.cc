@@ -26,11 +26,13 @@ bool ArchiveCell::operator<(const ArchiveCell& o) const {
 
 double run_cpu_seconds(const Results& r) {
   const Json& info = r.method_info;
-  double seconds = 0;
-  for (const char* key : {"train_seconds", "filter_seconds", "detect_seconds", "render_seconds"})
-    if (info.contains(key) && info.at(key).is_number()) seconds += info.at(key).get<double>();
+  auto number = [&](const char* key) { return info.contains(key) && info.at(key).is_number() ? info.at(key).get<double>() : 0.0; };
   const int threads = info.contains("threads") && info.at("threads").is_number_integer() ? info.at("threads").get<int>() : 1;
-  return seconds * std::max(1, threads);
+  // The training's own CPU seconds where recorded: wall seconds times threads overstate a run that
+  // shared its cores with other jobs.
+  const bool cpu = info.contains("train_cpu_seconds") && info.at("train_cpu_seconds").is_number();
+  const double train = cpu ? number("train_cpu_seconds") : number("train_seconds") * std::max(1, threads);
+  return train + (number("filter_seconds") + number("detect_seconds") + number("render_seconds")) * std::max(1, threads);
 }
 
 namespace {

@@ -38,8 +38,9 @@ struct ArchiveCell {
   bool operator<(const ArchiveCell& o) const;
 };
 
-// The CPU seconds a run cost: (train + filter + detect + render seconds) x threads, from its
-// method_info; a run that records no thread count counts as one thread.
+// The CPU seconds a run cost, from its method_info: the training's train_cpu_seconds (or, in runs
+// that do not record them, train_seconds x threads) plus (filter + detect + render seconds) x
+// threads; a run that records no thread count counts as one thread.
 double run_cpu_seconds(const Results& results);
 
 struct ArchiveAddOptions {

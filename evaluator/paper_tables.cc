@@ -256,13 +256,14 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const 
     CostRow row;
     row.method = m;
     row.reference = is_reference_method(m);
-    std::vector<double> train, restore, render, rss, gaussians;
+    std::vector<double> train, train_cpu, restore, render, rss, gaussians;
     for (const auto& lr : results) {
       if (lr.results.method != m) continue;
       ++row.runs;
       const Json& info = lr.results.method_info;
       auto push = [](std::vector<double>& v, double x) { if (std::isfinite(x)) v.push_back(x); };
       push(train, info_number(info, "train_seconds"));
+      push(train_cpu, info_number(info, "train_cpu_seconds"));
       const double f = info_number(info, "filter_seconds"), d = info_number(info, "detect_seconds");
       push(restore, (std::isfinite(f) ? f : 0) + (std::isfinite(d) ? d : 0));
       const double views = double(lr.results.per_view.size());
@@ -273,6 +274,8 @@ PaperTables build_paper_tables(const std::vector<LoadedResults>& results, const 
     }
     double unused_sd;
     mean_std(train, row.train_seconds, row.train_seconds_std);
+    mean_std(train_cpu, row.train_cpu_seconds, unused_sd);
+    if (int(train_cpu.size()) != row.runs) row.train_cpu_seconds = std::numeric_limits<double>::quiet_NaN();
     mean_std(restore, row.restoration_seconds, unused_sd);
     mean_std(render, row.render_ms_per_view, unused_sd);
     mean_std(rss, row.peak_rss_mb, unused_sd);
@@ -302,6 +305,7 @@ struct CostColumn {
   double CostRow::*field;
 };
 const CostColumn kCostColumns[] = {{"Training (s)", 0, &CostRow::train_seconds},
+                                   {"Training CPU (s)", 0, &CostRow::train_cpu_seconds},
                                    {"AEF + LED (s)", 1, &CostRow::restoration_seconds},
                                    {"Render (ms/view)", 1, &CostRow::render_ms_per_view},
                                    {"Peak memory (MB)", 0, &CostRow::peak_rss_mb},
@@ -317,7 +321,9 @@ std::string cost_label(const CostRow& r) { return r.reference ? r.method + " (re
 
 const char* kCostNote =
     "Mean over each method's runs (all variants and seeds; training time with its standard deviation). "
-    "Training: the optimisation only (3DGS, or the radiance field for the NeRF-family methods); AEF + LED: "
+    "Training: the optimisation only (3DGS, or the radiance field for the NeRF-family methods), wall seconds, "
+    "which grow when other jobs share the cores; Training CPU: its CPU seconds over every thread, which do "
+    "not (empty unless every run records them); AEF + LED: "
     "the particle filter and the lens detector before it; render: per test view; "
     "peak memory: the training process's peak resident set.";
 

@@ -27,6 +27,9 @@ struct CostRow {
   std::string method;
   int runs = 0;
   double train_seconds = 0, train_seconds_std = 0;
+  // Mean CPU seconds of the training (method_info.train_cpu_seconds, every thread's): NaN unless
+  // every run of the method records them. Wall seconds grow when jobs share cores; these do not.
+  double train_cpu_seconds = 0;
   double restoration_seconds = 0;  // filter_seconds + detect_seconds; 0 for methods without either
   double render_ms_per_view = 0;
   double peak_rss_mb = 0;

@@ -32,6 +32,7 @@ struct RunRecord {
   TrainInputs inputs;
   int iterations = 0;
   double train_seconds = 0, peak_rss_mb = 0;
+  std::optional<double> train_cpu_seconds;  // every thread's; absent from older records
   std::array<int, 3> lattice = {2, 2, 2};
   int64_t occupied_cells = 0;
   double near_m = 0;
@@ -46,6 +47,7 @@ constexpr auto kRunFields = [](auto& s, auto& f) {
   kTrainInputsFields(s.inputs, f);
   f("iterations", s.iterations);
   f("train_seconds", s.train_seconds);
+  f("train_cpu_seconds", s.train_cpu_seconds);
   f("peak_rss_mb", s.peak_rss_mb);
   f("lattice", s.lattice);
   f("occupied_cells", s.occupied_cells);
@@ -176,6 +178,7 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   }
   fs::create_directories(run);
   const auto t_start = std::chrono::steady_clock::now();
+  const double cpu_start = process_cpu_seconds();
   std::vector<TrainView> views = load_train_views(ds, o.inputs);
 
   // The frame covers every camera of the dataset (test views are rendered from it too); the near
@@ -198,13 +201,14 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   const FrustumFrame frame = forward_facing_frame(ds.cameras, near);
   NerfTrainer trainer(std::move(views), frame, o.nerf);
 
-  double excluded = 0;  // seconds spent on snapshots
-  auto info_json = [&](bool complete, double seconds) {
+  double excluded = 0, excluded_cpu = 0;  // spent on snapshots
+  auto info_json = [&](bool complete, double seconds, std::optional<double> cpu_seconds) {
     const GridDims d = trainer.field().dims();
     RunRecord rec = settings_record(o.dataset, o.inputs, o.nerf);
     rec.complete = complete;
     rec.iterations = trainer.iteration();
     rec.train_seconds = seconds;
+    rec.train_cpu_seconds = cpu_seconds;
     rec.peak_rss_mb = peak_rss_mb();
     rec.lattice = {d.nu, d.nv, d.nw};
     rec.occupied_cells = trainer.field().occupied_cells();
@@ -213,7 +217,7 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
     rec.frame = frame;
     return run_json(rec);
   };
-  write_file_atomic((run / kRunJson).string(), info_json(false, 0).dump(2) + "\n");
+  write_file_atomic((run / kRunJson).string(), info_json(false, 0, std::nullopt).dump(2) + "\n");
   std::vector<int> snaps;
   for (int it : o.snapshot_at)
     if (it < o.nerf.iterations) snaps.push_back(it);
@@ -222,6 +226,7 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
     if (on_iteration) on_iteration(st);
     if (std::find(snaps.begin(), snaps.end(), st.iteration) != snaps.end()) {
       const auto t0 = std::chrono::steady_clock::now();
+      const double c0 = process_cpu_seconds();
       const double train_s = seconds_since(t_start) - excluded;
       render_views(trainer.field(), ds, ds.split(o.snapshot_split), o.nerf.march,
                    nerf_snapshot_dir(o.out, st.iteration),
@@ -231,15 +236,17 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
                         {"iterations", st.iteration},
                         {"lattice_points", st.lattice_points}});
       excluded += seconds_since(t0);
+      excluded_cpu += process_cpu_seconds() - c0;
     }
   }
   result.train_seconds = seconds_since(t_start) - excluded;
+  result.train_cpu_seconds = process_cpu_seconds() - cpu_start - excluded_cpu;
   trainer.field().save((run / kFieldFile).string());
   result.iterations = trainer.iteration();
   result.peak_rss_mb = peak_rss_mb();
   result.lattice_points = trainer.field().dims().points();
   result.occupied_cells = trainer.field().occupied_cells();
-  write_file_atomic((run / kRunJson).string(), info_json(true, result.train_seconds).dump(2) + "\n");
+  write_file_atomic((run / kRunJson).string(), info_json(true, result.train_seconds, result.train_cpu_seconds).dump(2) + "\n");
   return result;
 }
 
@@ -253,12 +260,13 @@ NerfRenderResult render_nerf_run(const NerfRenderOptions& o) {
   std::vector<std::string> all_views;
   for (const Camera& c : ds.cameras) all_views.push_back(c.name);
   const std::vector<std::string>& names = o.split == "all" ? all_views : ds.split(o.split);
-  return render_views(field, ds, names, march, o.out,
-                      Json{{"method", o.method},
-                           {"train_seconds", ri.train_seconds},
-                           {"peak_rss_mb", std::max(ri.peak_rss_mb, peak_rss_mb())},
-                           {"iterations", ri.iterations},
-                           {"lattice_points", field.dims().points()}});
+  Json info{{"method", o.method},
+            {"train_seconds", ri.train_seconds},
+            {"peak_rss_mb", std::max(ri.peak_rss_mb, peak_rss_mb())},
+            {"iterations", ri.iterations},
+            {"lattice_points", field.dims().points()}};
+  if (ri.train_cpu_seconds) info["train_cpu_seconds"] = *ri.train_cpu_seconds;
+  return render_views(field, ds, names, march, o.out, info);
 }
 
 }  // namespace weathergs::nerf

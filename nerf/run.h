@@ -4,7 +4,7 @@
 // A run folder holds:
 //   run.json     {"format": "weathergs-nerf-run", "version": 1, "complete": bool, "dataset", the
 //                 inputs (images, images_dir, masks, masks_dir, points_dir), "iterations",
-//                 "train_seconds", "peak_rss_mb", "lattice": [nu, nv, nw], "occupied_cells",
+//                 "train_seconds", "train_cpu_seconds", "peak_rss_mb", "lattice": [nu, nv, nw], "occupied_cells",
 //                 "near_m", "options": {...}}
 //   field.bin    the trained field (field.h)
 //   snapshots/iter_NNNNNN/  renders of `snapshot_split` at the `snapshot_at` iterations with their
@@ -14,6 +14,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,7 @@ struct NerfRunOptions {
 struct NerfRunResult {
   int iterations = 0;
   double train_seconds = 0, peak_rss_mb = 0, near_m = 0;
+  std::optional<double> train_cpu_seconds;  // every thread's CPU seconds of the training
   int64_t lattice_points = 0, occupied_cells = 0;
   std::string near_source;  // "sfm points: N" or "default"
 };

@@ -35,6 +35,8 @@ struct RunRecord {
   int iterations = 0, sh_degree = 0;
   int64_t num_gaussians = 0, num_distractors = 0;
   double train_seconds = 0, peak_rss_mb = 0, extent = 0;
+  // CPU seconds of the training (every thread's); unset when it resumed from a checkpoint without them.
+  std::optional<double> train_cpu_seconds;
   int densify_capped = 0;
   TrainOptions options;
   TrainOptions effective;  // written as effective_schedule for readers; derived from options, so not read
@@ -51,6 +53,7 @@ constexpr auto kRunFields = [](auto& s, auto& f) {
   f("num_gaussians", s.num_gaussians);
   f("num_distractors", s.num_distractors, Optional{});  // desplat's; absent in older run.json
   f("train_seconds", s.train_seconds);
+  f("train_cpu_seconds", s.train_cpu_seconds);  // left out while unknown
   f("peak_rss_mb", s.peak_rss_mb);
   f("densify_capped", s.densify_capped, Optional{});
   f("extent", s.extent);
@@ -71,7 +74,8 @@ constexpr auto kRunFields = [](auto& s, auto& f) {
       [&](const JsonReader& r, const std::string& k) { r.mark(k); });
 };
 
-Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool complete, const std::string& init) {
+Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, std::optional<double> cpu_seconds,
+              bool complete, const std::string& init) {
   RunRecord rec;
   rec.complete = complete;
   rec.dataset = fs::absolute(o.dataset).lexically_normal().string();
@@ -83,6 +87,7 @@ Json run_json(const TrainRunOptions& o, const Trainer& t, double seconds, bool c
   rec.num_gaussians = int64_t(t.gaussians().size()) - t.num_distractors();
   rec.num_distractors = t.num_distractors();
   rec.train_seconds = seconds;
+  rec.train_cpu_seconds = cpu_seconds;
   rec.peak_rss_mb = peak_rss_mb();
   rec.densify_capped = t.densify_capped();
   rec.extent = t.extent();
@@ -240,6 +245,7 @@ TrainRunResult train_run(const TrainRunOptions& given, const IterationCallback& 
   GaussianSet<float> initial = initial_gaussians(dataset, o.inputs, o.train, views, &init);
   Trainer trainer(std::move(views), std::move(initial), o.train, extent);
   double seconds_before = 0;
+  std::optional<double> cpu_before = 0.0;
   if (o.resume) {
     const RunRecord ri = read_run_json(o.out);
     TrainInputs given = o.inputs;
@@ -247,16 +253,22 @@ TrainRunResult train_run(const TrainRunOptions& given, const IterationCallback& 
     if (!(ri.inputs == given) || fs::path(ri.dataset) != fs::absolute(o.dataset).lexically_normal())
       throw InputError(info, "the run was trained on dataset " + ri.dataset + " with " + ri.inputs.to_string() +
                                  ": resume with the same inputs");
-    seconds_before = trainer.load_checkpoint(ckpt);
+    seconds_before = trainer.load_checkpoint(ckpt, &cpu_before);
   }
   const auto t0 = std::chrono::steady_clock::now();
-  double excluded = 0;  // seconds spent writing snapshots: not training
+  const double cpu0 = process_cpu_seconds();
+  double excluded = 0, excluded_cpu = 0;  // spent writing snapshots: not training
   auto elapsed = [&] { return seconds_before + seconds_since(t0) - excluded; };
+  auto elapsed_cpu = [&]() -> std::optional<double> {
+    if (!cpu_before) return std::nullopt;
+    return *cpu_before + process_cpu_seconds() - cpu0 - excluded_cpu;
+  };
   auto save = [&](bool complete) {
     const double s = elapsed();
-    trainer.save_checkpoint(ckpt, s);
+    const std::optional<double> cpu = elapsed_cpu();
+    trainer.save_checkpoint(ckpt, s, cpu);
     write_ply(ply, trainer.scene_gaussians());  // distractors (desplat) are never exported
-    write_file_atomic(info, run_json(o, trainer, s, complete, init).dump(2) + "\n");
+    write_file_atomic(info, run_json(o, trainer, s, cpu, complete, init).dump(2) + "\n");
   };
   TrainRunResult result;
   while (trainer.iteration() < o.train.iterations) {
@@ -267,6 +279,7 @@ TrainRunResult train_run(const TrainRunOptions& given, const IterationCallback& 
     if (st.iteration < o.train.iterations &&
         std::find(o.snapshot_at.begin(), o.snapshot_at.end(), st.iteration) != o.snapshot_at.end()) {
       const auto w0 = std::chrono::steady_clock::now();
+      const double c0 = process_cpu_seconds();
       const double s = elapsed();
       const std::string stem = snapshot_stem(o.out, st.iteration);
       fs::create_directories(fs::path(stem).parent_path());
@@ -276,6 +289,7 @@ TrainRunResult train_run(const TrainRunOptions& given, const IterationCallback& 
                                              {"num_gaussians", int64_t(trainer.gaussians().size()) - trainer.num_distractors()}}
                                                 .dump(2) + "\n");
       excluded += seconds_since(w0);
+      excluded_cpu += process_cpu_seconds() - c0;
     }
     if (o.checkpoint_every > 0 && st.iteration % o.checkpoint_every == 0 && st.iteration < o.train.iterations)
       save(false);
@@ -284,6 +298,7 @@ TrainRunResult train_run(const TrainRunOptions& given, const IterationCallback& 
   result.iterations = trainer.iteration();
   result.num_gaussians = int64_t(trainer.gaussians().size()) - trainer.num_distractors();
   result.train_seconds = elapsed();
+  result.train_cpu_seconds = elapsed_cpu();
   result.peak_rss_mb = peak_rss_mb();
   return result;
 }
@@ -315,6 +330,7 @@ RenderRunResult render_run(const RenderRunOptions& o) {
     JsonReader r = JsonReader::from_file(stem + ".json");
     ri.iterations = r.get<int>("iteration");
     ri.train_seconds = r.get<double>("train_seconds");
+    ri.train_cpu_seconds.reset();  // snapshots record wall seconds only
     r.get<int64_t>("num_gaussians");
     r.finish();
     ply = stem + ".ply";
@@ -349,12 +365,13 @@ RenderRunResult render_run(const RenderRunOptions& o) {
     }
     ++result.views;
   }
-  const Json info{{"method", o.method},
-                  {"train_seconds", ri.train_seconds},
-                  {"peak_rss_mb", std::max(ri.peak_rss_mb, peak_rss_mb())},
-                  {"num_gaussians", g.size()},
-                  {"iterations", ri.iterations},
-                  {"render_seconds", result.render_seconds}};
+  Json info{{"method", o.method},
+            {"train_seconds", ri.train_seconds},
+            {"peak_rss_mb", std::max(ri.peak_rss_mb, peak_rss_mb())},
+            {"num_gaussians", g.size()},
+            {"iterations", ri.iterations},
+            {"render_seconds", result.render_seconds}};
+  if (ri.train_cpu_seconds) info["train_cpu_seconds"] = *ri.train_cpu_seconds;
   write_file_atomic((fs::path(dir.path()) / "info.json").string(), info.dump(2) + "\n");
   dir.commit();
   return result;

@@ -5,7 +5,9 @@
 //                      "images": "images"|"clean", "images_dir": path|null, "masks": "none"|"lens"|
 //                      "particles"|"all", "masks_dir": path|null, "points_dir": path|null (optional),
 //                      "iterations": done, "sh_degree": ...,
-//                      "num_gaussians": ..., "train_seconds": ..., "peak_rss_mb": ..., "options": {...}}
+//                      "num_gaussians": ..., "train_seconds": ..., "train_cpu_seconds": ... (every
+//                      thread's; left out when resumed from a checkpoint that lacks them),
+//                      "peak_rss_mb": ..., "options": {...}}
 //   point_cloud.ply   the standard 3DGS PLY (written at every checkpoint and at the end)
 //   checkpoint.bin    parameters + Adam state for --resume
 //   snapshots/iter_NNNNNN.{ply,json}  the model at the iterations of `snapshot_at` (accuracy against
@@ -16,6 +18,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -64,6 +67,7 @@ struct TrainRunResult {
   int iterations = 0;
   int64_t num_gaussians = 0;
   double train_seconds = 0, final_loss = 0, final_psnr = 0, peak_rss_mb = 0;
+  std::optional<double> train_cpu_seconds;  // unset when resumed from a checkpoint without them
 };
 
 // `train` with its length and budget resolved for the dataset's training views

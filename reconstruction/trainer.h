@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -225,9 +226,13 @@ class Trainer {
   int64_t prune_by_blend_weight(double threshold);
 
   // Checkpoint: parameters, Adam state, densification statistics and the iteration (binary).
-  void save_checkpoint(const std::string& path, double train_seconds) const;
-  // Restores a checkpoint written with the same options; returns the train seconds stored in it.
-  double load_checkpoint(const std::string& path);
+  // train_cpu_seconds: the CPU seconds of the training so far, unknown when a run resumed from a
+  // checkpoint that did not record them.
+  void save_checkpoint(const std::string& path, double train_seconds,
+                       std::optional<double> train_cpu_seconds = std::nullopt) const;
+  // Restores a checkpoint written with the same options; returns the train seconds stored in it
+  // (and sets *train_cpu_seconds to its CPU seconds, unset when it records none).
+  double load_checkpoint(const std::string& path, std::optional<double>* train_cpu_seconds = nullptr);
 
  private:
   // factor: this iteration's downsampling (resolution.h), which divides the budget by factor^2.

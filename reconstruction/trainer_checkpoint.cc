@@ -21,7 +21,8 @@ constexpr char kCheckpointMagicV2[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '2'};
 constexpr char kCheckpointMagicV1[8] = {'W', 'G', 'S', 'C', 'K', 'P', 'T', '1'};
 }
 
-void Trainer::save_checkpoint(const std::string& path, double train_seconds) const {
+void Trainer::save_checkpoint(const std::string& path, double train_seconds,
+                              std::optional<double> train_cpu_seconds) const {
   Json header{{"iteration", iteration_},
               {"sh_degree", sh_degree_},
               {"num_gaussians", g_.size()},
@@ -32,6 +33,7 @@ void Trainer::save_checkpoint(const std::string& path, double train_seconds) con
               {"robust_bins", options_.robust == TrainOptions::Robust::kNone ? 0 : robust_mask_.options().bins},
               {"wild_floats", wild_.state_size()},
               {"options", options_.to_json()}};
+  if (train_cpu_seconds) header["train_cpu_seconds"] = *train_cpu_seconds;
   const std::string h = header.dump();
   std::string out(kCheckpointMagic, 8);
   const uint64_t len = h.size();
@@ -55,7 +57,7 @@ void Trainer::save_checkpoint(const std::string& path, double train_seconds) con
   write_file_atomic(path, out);
 }
 
-double Trainer::load_checkpoint(const std::string& path) {
+double Trainer::load_checkpoint(const std::string& path, std::optional<double>* train_cpu_seconds) {
   const std::string bytes = read_file(path);
   if (bytes.size() >= 8 && std::memcmp(bytes.data(), kCheckpointMagicV1, 8) == 0)
     throw InputError(path, "checkpoint of an older weathergs (format 1); start the run over with --force");
@@ -98,6 +100,8 @@ double Trainer::load_checkpoint(const std::string& path) {
   const double robust_threshold = h.get<double>("robust_threshold");
   const size_t robust_bins = h.get<size_t>("robust_bins");
   const size_t wild_floats = h.get_or<size_t>("wild_floats", 0);
+  std::optional<double> cpu;  // absent from checkpoints of builds that did not count CPU seconds
+  if (h.has("train_cpu_seconds")) cpu = h.get<double>("train_cpu_seconds");
   h.finish();
   if (wild_floats != wild_.state_size())
     throw InputError(path, "checkpoint in-the-wild state of " + std::to_string(wild_floats) + " values, expected " +
@@ -158,6 +162,7 @@ double Trainer::load_checkpoint(const std::string& path) {
   adam_steps_ = adam_steps;
   extent_ = extent;
   parameters_checked_ = false;  // the loaded parameters are scanned before the next step uses them
+  if (train_cpu_seconds) *train_cpu_seconds = cpu;
   return seconds;
 }
 

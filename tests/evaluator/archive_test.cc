@@ -155,6 +155,22 @@ TEST(ArchiveTest, StatusSaysDoneStaleOrMissingWithTheCpuHours) {
   EXPECT_THROW(read_archive_matrix(tmp / "twice.json"), InputError);
 }
 
+// A run's cost is its training's CPU seconds where it records them (a one-thread run that shared
+// its cores took longer on the clock, not more CPU), else train seconds x threads; the restoration
+// stages and the renders count their seconds x threads either way.
+TEST(ArchiveTest, RunCpuSecondsPreferTheTrainingsCpuSeconds) {
+  Results r;
+  r.method_info = {{"train_seconds", 2000.0}, {"filter_seconds", 1.5}, {"detect_seconds", 0.5},
+                   {"render_seconds", 0.25}, {"threads", 1}};
+  EXPECT_DOUBLE_EQ(run_cpu_seconds(r), 2000 + 1.5 + 0.5 + 0.25);
+  r.method_info["train_cpu_seconds"] = 640.0;
+  EXPECT_DOUBLE_EQ(run_cpu_seconds(r), 640 + 1.5 + 0.5 + 0.25);
+  r.method_info["threads"] = 2;  // CPU seconds already count every thread
+  EXPECT_DOUBLE_EQ(run_cpu_seconds(r), 640 + 2 * (1.5 + 0.5 + 0.25));
+  r.method_info.erase("train_cpu_seconds");
+  EXPECT_DOUBLE_EQ(run_cpu_seconds(r), 2 * (2000 + 1.5 + 0.5 + 0.25));
+}
+
 TEST(RecipeDifferenceTest, NamesTheFirstDifferingKeyPath) {
   const Json a = recipe("weathergs"), b = recipe("weathergs", 7000);
   EXPECT_EQ(first_recipe_difference(a, b)->to_string(), "options/densify_until: 15000 vs 7000");

@@ -69,7 +69,11 @@ TEST(NerfRunTest, AFinishedFieldIsReusedOnlyWithEverySettingItRecords) {
   o.nerf = tiny_options();
   // Before and while training nothing is reusable; an incomplete run of the same settings starts over.
   EXPECT_EQ(nerf_run_output(o.out, o.dataset, o.inputs, o.nerf).state, StageOutput::State::kAbsent);
-  train_nerf_run(o);
+  const NerfRunResult trained = train_nerf_run(o);
+  // The training's CPU seconds are recorded beside its wall seconds.
+  ASSERT_TRUE(trained.train_cpu_seconds.has_value());
+  EXPECT_GT(*trained.train_cpu_seconds, 0);
+  EXPECT_EQ(read_json_file(o.out + "/run.json").at("train_cpu_seconds").get<double>(), *trained.train_cpu_seconds);
   const StageOutput same = nerf_run_output(o.out, o.dataset, o.inputs, o.nerf);
   EXPECT_EQ(same.state, StageOutput::State::kComplete) << same.why;
   // The same folder named another way is the same data.

@@ -1,8 +1,10 @@
 // End to end through the `weathergs` binary: train, checkpoint/resume, render, errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <thread>
 
 #include "core/atomic_file.h"
 #include "core/json_reader.h"
@@ -61,6 +63,13 @@ TEST(CliTest, TrainResumeRender) {
   EXPECT_GT(ri.get<int64_t>("num_gaussians"), 0);
   EXPECT_GT(ri.get<double>("peak_rss_mb"), 0);
   EXPECT_GE(ri.get<double>("train_seconds"), 0);
+  // The training's CPU seconds (every thread's), carried from run.json: there, and not more than
+  // its wall seconds times the cores its threads may use, with a scheduler tick's slack.
+  const JsonReader now = JsonReader::from_file(runp + "/run.json");
+  const double cpu = ri.get<double>("train_cpu_seconds");
+  EXPECT_GT(cpu, 0);
+  EXPECT_LE(cpu, std::max(1u, std::thread::hardware_concurrency()) * now.get<double>("train_seconds") + 0.02);
+  EXPECT_EQ(cpu, now.get<double>("train_cpu_seconds"));
   EXPECT_GE(ri.get<double>("render_seconds"), 0);
   ri.finish();
   EXPECT_EQ(weathergs::testing::count_entries(renders), int(d.split("test").size()) + 1);
