@@ -7,8 +7,8 @@
 # the default schedule, one thread each, two at a time, and prints per layout: each method's test
 # PSNR / SSIM / LPIPS, WeatherGS's gain over 3DGS, its share of the oracle's gap, the LED's IoU and
 # precision against the true drops, and whether the silent-LED warning fired.
-# Usage: [DATA_ONLY=1] carryover.sh WEATHERGS_BINARY OUT_DIR   (resumable: finished datasets and runs
-# are kept; DATA_ONLY=1 stops after the datasets)
+# Usage: [DATA_ONLY=1] [JOBS=2] carryover.sh WEATHERGS_BINARY OUT_DIR   (resumable: finished datasets and runs
+# are kept; DATA_ONLY=1 stops after the datasets; JOBS: runs at a time)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
 W=$(realpath "${1:?usage: carryover.sh WEATHERGS_BINARY OUT_DIR}")
@@ -45,7 +45,7 @@ run_cell() {
       --out "$OUT/runs/$data/$method" > "$OUT/runs/$data.$method.log" 2>&1
 }
 export -f run_cell; export W OUT
-printf '%s\n' "${cells[@]}" | xargs -P 2 -I{} bash -c 'run_cell {}'
+printf '%s\n' "${cells[@]}" | xargs -P "${JOBS:-2}" -I{} bash -c 'run_cell {}'
 /usr/bin/python3 - "$OUT" $LAYOUTS <<'PY'
 import json, os, sys
 out, layouts = sys.argv[1], [l.split(":") for l in sys.argv[2:]]
