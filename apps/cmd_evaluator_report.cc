@@ -40,8 +40,8 @@ int run(ReportArgs& a) {
   std::printf("report: %d variants, %d runs, %d test views, %d images, %.1f MB\n", s.variants, s.runs, s.views, s.images,
               double(s.bytes) / 1e6);
   if (!a.options.converged_dir.empty())
-    std::printf("converged (archive): %d runs of these variants from %s (the page's section 'Converged (archive)')\n",
-                s.converged_runs, a.options.converged_dir.c_str());
+    std::printf("converged (archive): %d run%s of these variants from %s (the page's section 'Converged (archive)')\n",
+                s.converged_runs, s.converged_runs == 1 ? "" : "s", a.options.converged_dir.c_str());
   std::printf("open %s\n", s.index.c_str());
   return kExitOk;
 }

@@ -277,6 +277,9 @@ Json metrics_json(const MetricValues& m) {
   return {{"psnr", number(m.psnr)}, {"ssim", number(m.ssim)}, {"lpips", m.lpips ? number(*m.lpips) : Json(nullptr)}};
 }
 
+// "1 run", "2 runs".
+std::string counted(size_t n, const std::string& noun) { return std::to_string(n) + " " + noun + (n == 1 ? "" : "s"); }
+
 std::string joined(const std::set<std::string>& names) {
   std::string out;
   for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
@@ -342,7 +345,7 @@ Json converged_section(const ReportOptions& o, const fs::path& final_out, const 
     lacking.erase(r.variant);
   }
   lines.push_back("The runs of the results archive " + o.converged_dir + " on " + joined(held) + ": " +
-                  std::to_string(runs.size()) + " runs of " + std::to_string(methods.size()) + " methods" +
+                  counted(runs.size(), "run") + " of " + counted(methods.size(), "method") +
                   (lacking.empty() ? "" : " (none yet on " + joined(lacking) + ")") +
                   ". Tables of their own, never mixed into this suite's rows: one table holds one recipe "
                   "(docs/archive.md).");
