@@ -24,14 +24,17 @@ bool ArchiveCell::operator<(const ArchiveCell& o) const {
   return std::tie(variant, method, seed) < std::tie(o.variant, o.method, o.seed);
 }
 
+bool records_cpu_seconds(const Results& r) {
+  return r.method_info.contains("train_cpu_seconds") && r.method_info.at("train_cpu_seconds").is_number();
+}
+
 double run_cpu_seconds(const Results& r) {
   const Json& info = r.method_info;
   auto number = [&](const char* key) { return info.contains(key) && info.at(key).is_number() ? info.at(key).get<double>() : 0.0; };
   const int threads = info.contains("threads") && info.at("threads").is_number_integer() ? info.at("threads").get<int>() : 1;
   // The training's own CPU seconds where recorded: wall seconds times threads overstate a run that
   // shared its cores with other jobs.
-  const bool cpu = info.contains("train_cpu_seconds") && info.at("train_cpu_seconds").is_number();
-  const double train = cpu ? number("train_cpu_seconds") : number("train_seconds") * std::max(1, threads);
+  const double train = records_cpu_seconds(r) ? number("train_cpu_seconds") : number("train_seconds") * std::max(1, threads);
   return train + (number("filter_seconds") + number("detect_seconds") + number("render_seconds")) * std::max(1, threads);
 }
 
@@ -198,7 +201,10 @@ ArchiveStatus archive_status(const std::string& suite_dir, const ArchiveMatrix& 
   ArchiveStatus s;
   s.suite = matrix.suite;
   s.notes = matrix.notes;
-  std::map<std::string, std::vector<double>> done_seconds;  // method -> CPU seconds of its done cells
+  // method -> CPU seconds of its done cells: those that record their training's CPU seconds, and
+  // those that do not (wall seconds x threads, an overstatement under load), the latter used only
+  // while a method has none of the former.
+  std::map<std::string, std::vector<double>> done_seconds, done_wall_seconds;
   for (const ArchiveCell& cell : matrix.cells) {
     CellStatus c;
     c.cell = cell;
@@ -216,7 +222,9 @@ ArchiveStatus archive_status(const std::string& suite_dir, const ArchiveMatrix& 
       } else {
         c.state = CellStatus::State::kDone;
         if (!whole) c.why = "dataset not checked";
-        done_seconds[cell.method].push_back(c.cpu_seconds);
+        if (!records_cpu_seconds(run->results))
+          c.why += std::string(c.why.empty() ? "" : "; ") + "cost from wall seconds x threads: no CPU seconds recorded";
+        (records_cpu_seconds(run->results) ? done_seconds : done_wall_seconds)[cell.method].push_back(c.cpu_seconds);
         s.spent_cpu_seconds += c.cpu_seconds;
       }
     }
@@ -231,11 +239,13 @@ ArchiveStatus archive_status(const std::string& suite_dir, const ArchiveMatrix& 
     // A stale run's own cost is the best guess of its re-run's; else the method's done cells, else the
     // matrix's estimate.
     if (c.state == CellStatus::State::kMissing || c.cpu_seconds <= 0) {
-      const auto done = done_seconds.find(c.cell.method);
-      if (done != done_seconds.end()) {
+      const std::vector<double>* done = nullptr;
+      if (const auto it = done_seconds.find(c.cell.method); it != done_seconds.end()) done = &it->second;
+      else if (const auto jt = done_wall_seconds.find(c.cell.method); jt != done_wall_seconds.end()) done = &jt->second;
+      if (done) {
         double sum = 0;
-        for (double x : done->second) sum += x;
-        c.cpu_seconds = sum / double(done->second.size());
+        for (double x : *done) sum += x;
+        c.cpu_seconds = sum / double(done->size());
       } else if (const auto e = matrix.estimate_cpu_seconds.find(c.cell.method); e != matrix.estimate_cpu_seconds.end()) {
         c.cpu_seconds = e->second;
         c.estimated = true;

@@ -42,6 +42,8 @@ struct ArchiveCell {
 // that do not record them, train_seconds x threads) plus (filter + detect + render seconds) x
 // threads; a run that records no thread count counts as one thread.
 double run_cpu_seconds(const Results& results);
+// Whether a run records its training's CPU seconds (method_info.train_cpu_seconds).
+bool records_cpu_seconds(const Results& results);
 
 struct ArchiveAddOptions {
   std::string run_dir;    // a finished run of `reconstruct` (results.json, curve.json, model/run.json)

@@ -145,7 +145,7 @@ TEST(ArchiveTest, StatusSaysDoneStaleOrMissingWithTheCpuHours) {
   // A done cell whose dataset could not be checked says so.
   const ArchiveStatus unchecked = archive_status(suite, m, [](const ArchiveCell& c) { return recipe_across_datasets(recipe(c.method)); });
   EXPECT_EQ(unchecked.cells[0].state, CellStatus::State::kDone);
-  EXPECT_EQ(unchecked.cells[0].why, "dataset not checked");
+  EXPECT_EQ(unchecked.cells[0].why, "dataset not checked; cost from wall seconds x threads: no CPU seconds recorded");
   // A matrix naming a variant it does not list, or a cell twice: refused.
   write_file_atomic(tmp / "bad.json", R"({"format": "weathergs-archive-matrix", "version": 1, "suite": "q",
     "variants": ["pool_rain"], "groups": [{"methods": ["3dgs"], "seeds": [0], "variants": ["pool_snow"]}]})");
@@ -153,6 +153,35 @@ TEST(ArchiveTest, StatusSaysDoneStaleOrMissingWithTheCpuHours) {
   write_file_atomic(tmp / "twice.json", R"({"format": "weathergs-archive-matrix", "version": 1, "suite": "q",
     "variants": ["pool_rain"], "groups": [{"methods": ["3dgs"], "seeds": [0]}, {"methods": ["3dgs"], "seeds": [0]}]})");
   EXPECT_THROW(read_archive_matrix(tmp / "twice.json"), InputError);
+}
+
+// The cost left is guessed from the done cells that record their training's CPU seconds, not from
+// those whose wall seconds (x threads) stand in for them, once a method has any of the former.
+TEST(ArchiveTest, StatusPrefersCellsThatRecordCpuSeconds) {
+  TempDir tmp;
+  const std::string suite = tmp / "results/quick";
+  write_file_atomic(tmp / "matrix.json", R"({"format": "weathergs-archive-matrix", "version": 1, "suite": "quick",
+    "variants": ["pool_rain"], "groups": [{"methods": ["3dgs"], "seeds": [0, 1, 2]}]})");
+  const ArchiveMatrix m = read_archive_matrix(tmp / "matrix.json");
+  for (int seed : {0, 1}) {
+    const std::string run = make_run(tmp, "run" + std::to_string(seed), "pool_rain", "3dgs", seed, recipe("3dgs"), 3600, 1);
+    if (seed == 1) {  // 3600 s on the clock, 600 of them its own CPU's
+      Results r = read_results(run + "/results.json");
+      r.method_info["train_cpu_seconds"] = 600.0;
+      write_results(run + "/results.json", r);
+    }
+    ArchiveAddOptions o;
+    o.run_dir = run;
+    o.suite_dir = suite;
+    archive_add(o);
+  }
+  const ArchiveStatus s = archive_status(suite, m, [](const ArchiveCell& c) { return recipe(c.method); });
+  ASSERT_EQ(s.done, 2);
+  EXPECT_EQ(s.cells[0].why, "cost from wall seconds x threads: no CPU seconds recorded");
+  EXPECT_EQ(s.cells[1].why, "");
+  EXPECT_DOUBLE_EQ(s.spent_cpu_seconds, 3602 + 602);
+  EXPECT_DOUBLE_EQ(s.left_cpu_seconds, 602);  // seed 2, at the CPU-recording cell's cost
+  EXPECT_FALSE(s.left_estimated);
 }
 
 // A run's cost is its training's CPU seconds where it records them (a one-thread run that shared
