@@ -21,8 +21,7 @@ struct LeaderboardArgs {
 
 int run_leaderboard(const LeaderboardArgs& args) {
   const evaluator::TableFormat format = evaluator::parse_table_format(args.format);
-  if (!args.note.empty() && format == evaluator::TableFormat::kCsv)  // before reading every result
-    throw InputError("--note", "a CSV table holds data only, with no place for a note: use --format md, latex or html");
+  evaluator::check_note(format, args.note);  // before reading every result
   std::optional<evaluator::PublishedTables> published;
   if (!args.against_paper.empty()) {
     if (format != evaluator::TableFormat::kMarkdown)

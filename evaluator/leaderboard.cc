@@ -477,10 +477,14 @@ void html(std::ostringstream& o, const LeaderboardTable& t) {
 
 }  // namespace
 
-std::string document_begin(TableFormat format, const std::string& title, const std::string& note) {
+void check_note(TableFormat format, const std::string& note) {
   // CSV holds data only: a comment line would be a row to a plain CSV reader.
   if (format == TableFormat::kCsv && !note.empty())
     throw InputError("--note", "a CSV table holds data only, with no place for a note: use --format md, latex or html");
+}
+
+std::string document_begin(TableFormat format, const std::string& title, const std::string& note) {
+  check_note(format, note);
   switch (format) {
     case TableFormat::kMarkdown: return "# " + title + "\n\n" + (note.empty() ? "" : note + "\n\n");
     case TableFormat::kCsv: return "";

@@ -147,6 +147,8 @@ void mean_std(const std::vector<double>& x, double& mean, double& sd);
 // Pieces of render_leaderboard for documents that add their own tables (evaluator/paper_tables.h).
 std::string render_table(const LeaderboardTable& table, TableFormat format, bool csv_header);
 std::string document_begin(TableFormat format, const std::string& title, const std::string& note = "");
+// InputError when `note` cannot go into a table of `format` (CSV holds data only).
+void check_note(TableFormat format, const std::string& note);
 std::string document_end(TableFormat format);
 std::string csv_escape(const std::string& s);
 std::string latex_escape(const std::string& s);

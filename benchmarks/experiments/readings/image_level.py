@@ -66,7 +66,7 @@ def scored(binary, data, renders, target, out, log):
 
 
 def mask_stats(mask_dir, data, views):
-    covered = iou_num = iou_den = tp = particle_total = particle_hit = 0.0
+    covered = hit = union = particle_total = particle_hit = 0.0
     pixels = 0
     for v in views:
         m = load(os.path.join(mask_dir, v + ".png"), gray=True) > 0.5
@@ -75,14 +75,13 @@ def mask_stats(mask_dir, data, views):
         part = load(os.path.join(data, "masks", "particles", v + ".png"), gray=True) > 0.5
         pixels += m.size
         covered += m.sum()
-        tp += (m & lens).sum()
-        iou_num += (m & lens).sum()
-        iou_den += (m | lens).sum()
+        hit += (m & lens).sum()
+        union += (m | lens).sum()
         particle_total += part.sum()
         particle_hit += (m & part).sum()
     return {"masked_share": covered / pixels,
-            "lens_iou": iou_num / iou_den if iou_den else None,
-            "lens_precision": tp / covered if covered else None,
+            "lens_iou": hit / union if union else None,
+            "lens_precision": hit / covered if covered else None,
             "particles_covered": particle_hit / particle_total if particle_total else None}
 
 
