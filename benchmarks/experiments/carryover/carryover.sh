@@ -7,8 +7,10 @@
 # the default schedule, one thread each, two at a time, and prints per layout: each method's test
 # PSNR / SSIM / LPIPS, WeatherGS's gain over 3DGS, its share of the oracle's gap, the LED's IoU and
 # precision against the true drops, and whether the silent-LED warning fired.
-# Usage: [DATA_ONLY=1] [JOBS=2] carryover.sh WEATHERGS_BINARY OUT_DIR   (resumable: finished datasets and runs
-# are kept; DATA_ONLY=1 stops after the datasets; JOBS: runs at a time)
+# Usage: [DATA_ONLY=1] [JOBS=2] [ARCHIVE=DIR] [BENCH_RUNS=DIR] carryover.sh WEATHERGS_BINARY OUT_DIR
+# Resumable: finished datasets and runs are kept. DATA_ONLY=1 stops after the datasets; JOBS: runs at a
+# time; ARCHIVE: the results archive whose rain variants the layouts are set beside (the quick suite's);
+# BENCH_RUNS: the workflow's runs folder of those cells, for the benchmark's LED scores (optional).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../../.." && pwd)
 W=$(realpath "${1:?usage: carryover.sh WEATHERGS_BINARY OUT_DIR}")
@@ -46,22 +48,5 @@ run_cell() {
 }
 export -f run_cell; export W OUT
 printf '%s\n' "${cells[@]}" | xargs -P "${JOBS:-2}" -I{} bash -c 'run_cell {}'
-/usr/bin/python3 - "$OUT" $LAYOUTS <<'PY'
-import json, os, sys
-out, layouts = sys.argv[1], [l.split(":") for l in sys.argv[2:]]
-print("| layout (optics) | 3dgs | weathergs | gt-masks | oracle | gain | share of the oracle's gap | LED IoU / precision | silent-LED warning |")
-print("|---|---|---|---|---|---|---|---|---|")
-for name, _, fnum, focus in layouts:
-    d = f"{name}_wet"
-    r = {m: json.load(open(f"{out}/runs/{d}/{m}/results.json")) for m in ("3dgs", "weathergs", "gt-masks", "oracle")}
-    met = {m: r[m]["metrics"] for m in r}
-    cell = lambda m: f"{met[m]['psnr']:.2f} / {met[m]['ssim']:.3f} / {met[m]['lpips']:.3f}"
-    gain = met["weathergs"]["psnr"] - met["3dgs"]["psnr"]
-    gap = met["oracle"]["psnr"] - met["3dgs"]["psnr"]
-    det = json.load(open(f"{out}/runs/{d}/weathergs/detected/detect.json")) if os.path.exists(f"{out}/runs/{d}/weathergs/detected/detect.json") else {}
-    gt = det.get("ground_truth") or {}
-    warn = r["weathergs"]["method_info"].get("warnings", [])
-    print(f"| {name} (f/{fnum}, focus {focus} m) | {cell('3dgs')} | {cell('weathergs')} | {cell('gt-masks')} | {cell('oracle')} "
-          f"| {gain:+.2f} dB | {gain / gap:.0%} of {gap:.2f} dB | {gt.get('iou', float('nan')):.3f} / {gt.get('precision', float('nan')):.3f} "
-          f"| {'yes: ' + warn[0][:60] if warn else 'no'} |")
-PY
+/usr/bin/python3 "$ROOT/benchmarks/experiments/carryover/summary.py" "$OUT" "${ARCHIVE:-$ROOT/benchmarks/results/quick}" \
+  "${BENCH_RUNS:-}" $LAYOUTS
