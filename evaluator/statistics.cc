@@ -1,5 +1,6 @@
 #include "evaluator/statistics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -70,6 +71,16 @@ double student_t_quantile(double alpha, int df) {
     (student_t_cdf(mid, df) < target ? lo : hi) = mid;
   }
   return 0.5 * (lo + hi);
+}
+
+double sign_test_p(int k, int n) {
+  WGS_CHECK(n >= 1 && k <= n);
+  if (k <= 0) return 1;
+  // Sum of C(n, i) / 2^n for i = k..n, each term by lgamma so that large n stays finite.
+  double p = 0;
+  for (int i = k; i <= n; ++i)
+    p += std::exp(std::lgamma(n + 1.0) - std::lgamma(i + 1.0) - std::lgamma(n - i + 1.0) - n * std::log(2.0));
+  return std::min(1.0, p);
 }
 
 MeanInterval mean_ci95(const std::vector<double>& x) {

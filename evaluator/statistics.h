@@ -1,5 +1,5 @@
 // The statistics behind the paper-protocol tables: Student-t confidence intervals over seeds, paired
-// differences, and Kendall's rank correlation.
+// differences, the sign test and Kendall's rank correlation.
 #pragma once
 
 #include <vector>
@@ -19,6 +19,10 @@ struct MeanInterval {
   double half_width = 0;  // NaN when n < 2
 };
 MeanInterval mean_ci95(const std::vector<double>& x);
+
+// The one-sided sign test: P(X >= k) for X ~ Binomial(n, 1/2), i.e. the chance that k or more of n
+// paired differences share a sign when each sign is a fair coin. 1 for k <= 0; n >= 1, k <= n.
+double sign_test_p(int k, int n);
 
 // Kendall's tau-b between two paired samples (ties counted as in Kendall 1945): +1 for the same
 // order, -1 for the reverse; NaN for fewer than 2 pairs or when either sample is constant.

@@ -3,7 +3,9 @@
 # Writes, between the markers "<!-- results-tables: begin -->" and "<!-- results-tables: end -->" of
 # DOC: the archive's state (weathergs archive status), the paper's tables with intervals, paired
 # differences and the agreement with the paper (leaderboard --paper --against-paper), and links to
-# the curves (test PSNR against training seconds per variant, plot_curves.py) written to IMAGES.
+# the curves (test PSNR against training seconds per variant, plot_curves.py) written to IMAGES, and
+# whether the suite's paired differences carry over to CARRY_TO (env; default: the sibling suite
+# "paper", the paper-profile check; weathergs carry-over), once that archive holds runs.
 # The archive must be committed (no change under it in git) so that the tables name one commit;
 # outside a git work tree they name none.
 # Usage: scripts/results-tables.sh [WEATHERGS_BINARY] [ARCHIVE_SUITE_DIR] [DOC] [IMAGES_DIR]
@@ -13,6 +15,7 @@ W=$(realpath "${1:-$ROOT/build/apps/weathergs}")
 SUITE=$(realpath -m "${2:-$ROOT/benchmarks/results/quick}")
 DOC=$(realpath -m "${3:-$ROOT/docs/results.md}")
 IMAGES=$(realpath -m "${4:-$ROOT/docs/images/results}")
+CARRY_TO=$(realpath -m "${CARRY_TO:-$(dirname "$SUITE")/paper}")
 BEGIN="<!-- results-tables: begin -->"
 END="<!-- results-tables: end -->"
 fail() { echo "results-tables: $*" >&2; exit 2; }
@@ -30,6 +33,13 @@ if git -C "$SUITE" rev-parse --is-inside-work-tree > /dev/null 2>&1; then
   [ -z "$changed" ] || fail "$SUITE has changes not committed (first: ${changed%%$'\n'*}): commit the runs first (make archive-commit), so that the tables name one commit"
   commit=$(git -C "$SUITE" log -1 --format=%h -- . 2>/dev/null)
   [ -n "$commit" ] || commit="none (not committed yet)"
+fi
+mapfile -t carry_results < <([ -d "$CARRY_TO" ] && find "$CARRY_TO" -mindepth 4 -maxdepth 4 -path '*/seed*/results.json' | sort)
+carry_commit=""
+if [ ${#carry_results[@]} -gt 0 ] && git -C "$CARRY_TO" rev-parse --is-inside-work-tree > /dev/null 2>&1; then
+  changed=$(git -C "$CARRY_TO" status --porcelain -- . | head -3)
+  [ -z "$changed" ] || fail "$CARRY_TO has changes not committed (first: ${changed%%$'\n'*}): commit the runs first (make archive-commit)"
+  carry_commit=" at its commit $(git -C "$CARRY_TO" log -1 --format=%h -- . 2>/dev/null)"
 fi
 
 suite_name=$(basename "$SUITE")
@@ -70,6 +80,19 @@ rel_images=$(realpath -m --relative-to="$(dirname "$DOC")" "$IMAGES")
         cp "$png" "$IMAGES/$v.png.tmp" && mv "$IMAGES/$v.png.tmp" "$IMAGES/$v.png"
         echo "- $v: ![$v]($rel_images/$v.png)"
       done
+    fi
+    echo
+    echo "### Does the verdict carry over? The suite \`$(basename "$CARRY_TO")\`"
+    echo
+    if [ ${#carry_results[@]} = 0 ]; then
+      echo "No run archived in \`${CARRY_TO#$ROOT/}\` yet."
+    else
+      echo "\`weathergs carry-over ${SUITE#$ROOT/} ${CARRY_TO#$ROOT/}\`, its archive$carry_commit:"
+      echo
+      if ! msg=$("$W" --quiet carry-over "$SUITE" "$CARRY_TO" -o "$tmp/carry.md" 2>&1); then
+        echo "$msg" >&2; exit 2
+      fi
+      sed -e "s|$ROOT/||g" "$tmp/carry.md"
     fi
   fi
 } > "$tmp/section.md"

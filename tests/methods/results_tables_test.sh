@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # `make results` (scripts/results-tables.sh) on a small results archive: the section
-# between the markers is rewritten with the archive's state, the paper's tables and the curves, the
+# between the markers is rewritten with the archive's state, the paper's tables, the curves and the
+# carry-over to a second suite (CARRY_TO), the
 # rest of the page is kept byte for byte, a second run gives the same page, and bad input (no matrix,
 # markers missing, a broken result) is refused with exit 2 before the page is touched.
 # Usage: results_tables_test.sh WEATHERGS_BINARY WORK_DIR SOURCE_DIR ARCHIVE_SUITE_DIR (runs of 3dgs and oracle
@@ -33,7 +34,15 @@ for v in pool_rain; do
   [ -s "$T/images/$v.png" ] || fail "no curve image for $v"
   grep -qF -e "- $v: ![$v](images/$v.png)" "$DOC" || fail "no link to the curve of $v"
 done
+grep -q "^### Does the verdict carry over? The suite .paper.$" "$DOC" && grep -q "^No run archived in .*/results/paper. yet.$" "$DOC" ||
+  fail "no carry-over section saying that the sibling suite 'paper' holds no run"
 cp "$DOC" "$T/first.md"
+# A target suite with runs (CARRY_TO): the carry-over table (weathergs carry-over) under its heading.
+mkdir -p "$T/target"; cp -r "$A/pool_rain" "$T/target/"; cp "$DOC" "$T/carry.md"
+CARRY_TO="$T/target" bash "$SRC/scripts/results-tables.sh" "$W" "$A" "$T/carry.md" "$T/images" > /dev/null
+grep -q "^### Does the verdict carry over? The suite .target.$" "$T/carry.md" || fail "no carry-over heading for CARRY_TO"
+grep -q "^| oracle - 3dgs | PSNR | 1 | .* | 1.00 | 1 of 1 | 0.500 | same sign on 1 of 1, too few variants" "$T/carry.md" ||
+  { cat "$T/carry.md"; fail "no carry-over row for the oracle's gap"; }
 bash "$SRC/scripts/results-tables.sh" "$W" "$A" "$DOC" "$T/images" > /dev/null
 cmp -s "$DOC" "$T/first.md" || fail "a second run changed the page"
 
