@@ -1,8 +1,6 @@
 // weathergs carry-over FROM TO: whether one results archive's paired differences hold in another.
-#include <cstdio>
 
 #include "apps/command.h"
-#include "core/atomic_file.h"
 #include "evaluator/carry_over.h"
 
 namespace weathergs::cli {
@@ -16,12 +14,7 @@ struct CarryOverArgs {
 int run_carry_over(const CarryOverArgs& args) {
   const auto pairs = evaluator::parse_carry_over_pairs(args.pairs, "--pairs");  // before reading any run
   const std::string text = evaluator::render_carry_over(evaluator::carry_over(args.from, args.to, pairs));
-  if (args.output.empty() || args.output == "-") {
-    std::fputs(text.c_str(), stdout);
-  } else {
-    write_file_atomic(args.output, text);
-    std::fprintf(stderr, "wrote %s\n", args.output.c_str());
-  }
+  write_text_output(args.output, text);
   return kExitOk;
 }
 

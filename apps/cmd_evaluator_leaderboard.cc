@@ -1,9 +1,7 @@
 // weathergs leaderboard: the paper's tables from any number of results files.
-#include <cstdio>
 #include <optional>
 
 #include "apps/command.h"
-#include "core/atomic_file.h"
 #include "evaluator/leaderboard.h"
 #include "evaluator/paper_agreement.h"
 #include "evaluator/paper_tables.h"
@@ -41,12 +39,7 @@ int run_leaderboard(const LeaderboardArgs& args) {
   } else {
     text = evaluator::render_leaderboard(evaluator::build_leaderboard(loaded, options), format, args.note);
   }
-  if (args.output.empty() || args.output == "-") {
-    std::fputs(text.c_str(), stdout);
-  } else {
-    write_file_atomic(args.output, text);
-    std::fprintf(stderr, "wrote %s\n", args.output.c_str());
-  }
+  write_text_output(args.output, text);
   return kExitOk;
 }
 

@@ -34,6 +34,10 @@ bool register_command(const char* name, CommandFactory factory);
 // values with characters a shell would split on are single-quoted. Replays as the same command.
 std::string recorded_command(const std::string& name, const CLI::App& sub);
 
+// A command's text output: to stdout when `path` is empty or "-", else written atomically, saying so
+// on stderr (stdout stays the data's).
+void write_text_output(const std::string& path, const std::string& text);
+
 }  // namespace weathergs::cli
 
 #define WGS_REGISTER_COMMAND(name, factory) \

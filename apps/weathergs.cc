@@ -8,6 +8,7 @@
 #include <new>
 
 #include "apps/command.h"
+#include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/json_reader.h"
 #include "core/parallel.h"
@@ -26,6 +27,15 @@ std::map<std::string, CommandFactory>& registry() {
 bool register_command(const char* name, CommandFactory factory) {
   registry()[name] = factory;
   return true;
+}
+
+void write_text_output(const std::string& path, const std::string& text) {
+  if (path.empty() || path == "-") {
+    std::fputs(text.c_str(), stdout);
+  } else {
+    write_file_atomic(path, text);
+    std::fprintf(stderr, "wrote %s\n", path.c_str());
+  }
 }
 
 std::string recorded_command(const std::string& name, const CLI::App& sub) {
