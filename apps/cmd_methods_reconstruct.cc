@@ -42,7 +42,7 @@ struct ReconstructArgs {
 constexpr const char* k3dgsFlags[] = {"--train-options", "--downsample-start", "--full-resolution-at",
                                       "--background", "--max-gaussians", "--random-init", "--random-init-count",
                                       "--mask-normalization", "--large-prune", "--large-prune-from",
-                                      "--distractor-opacity-weight", "--checkpoint-every"};
+                                      "--distractor-opacity-weight"};
 // Keys a 3DGS method's recipe sets (methods::method_train_options): --train-options may not set them.
 constexpr const char* kRecipeKeys[] = {"robust", "distractors_per_view", "in_the_wild"};
 
@@ -74,9 +74,10 @@ void refuse_unread(const ReconstructArgs& a, const methods::ReconstructOptions& 
   refuse_if(methods::dataset_has_points(ds, o.method), "--colmap",
             "the dataset holds the SfM points " + method + " starts from: COLMAP never runs");
   refuse_if(a.scoring.no_lpips, "--lpips-model", "--no-lpips skips LPIPS");
-  refuse_if(o.checkpoint_every >= o.train.iterations, "--checkpoint-every",
-            std::to_string(o.checkpoint_every) + " is not below the run's " + std::to_string(o.train.iterations) +
-                " iterations: no checkpoint would come before the end (0: only at the end)");
+  const int length = nerf ? o.nerf.iterations : o.train.iterations;  // both backends checkpoint
+  refuse_if(o.checkpoint_every >= length, "--checkpoint-every",
+            std::to_string(o.checkpoint_every) + " is not below the run's " + std::to_string(length) +
+                (nerf ? " radiance-field" : "") + " iterations: no checkpoint would come before the end (0: only at the end)");
   if (nerf) {
     const nerf::NerfOptions& n = o.nerf;
     if (a.nerf_options_file.empty()) return;

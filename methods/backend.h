@@ -70,7 +70,7 @@ std::vector<int> scored_snapshots(const std::vector<RunFraction>& snapshots, int
 // 3DGS with the trainer's options as the method's recipe made them, checkpointing every
 // `checkpoint_every` iterations (0: only at the end).
 std::unique_ptr<Backend> make_3dgs_backend(BackendRun run, const reconstruction::TrainOptions& train, int checkpoint_every);
-// The grid radiance field (no checkpoints).
-std::unique_ptr<Backend> make_nerf_backend(BackendRun run, const nerf::NerfOptions& nerf);
+// The grid radiance field, checkpointing every `checkpoint_every` iterations (0: never).
+std::unique_ptr<Backend> make_nerf_backend(BackendRun run, const nerf::NerfOptions& nerf, int checkpoint_every);
 
 }  // namespace weathergs::methods

@@ -7,7 +7,8 @@ namespace {
 
 class FieldBackend final : public Backend {
  public:
-  FieldBackend(BackendRun run, const nerf::NerfOptions& nerf) : run_(std::move(run)), nerf_(nerf) {}
+  FieldBackend(BackendRun run, const nerf::NerfOptions& nerf, int checkpoint_every)
+      : run_(std::move(run)), nerf_(nerf), checkpoint_every_(checkpoint_every) {}
 
   int iterations() const override { return nerf_.iterations; }
 
@@ -25,7 +26,9 @@ class FieldBackend final : public Backend {
     t.method = run_.method;
     t.nerf = nerf_;
     t.snapshot_at = snapshot_iterations(run_.snapshots, iterations());
-    t.force = true;  // no checkpoints: what an incomplete run left is replaced
+    t.checkpoint_every = checkpoint_every_;
+    t.resume = model_output().state == StageOutput::State::kPartial;
+    t.force = !t.resume;  // leftovers of a run that cannot resume are replaced
     const nerf::NerfRunResult r = nerf::train_nerf_run(t, [&](const nerf::NerfIterationStats& st) {
       if (!on_iteration) return;
       reconstruction::IterationStats is;
@@ -34,7 +37,7 @@ class FieldBackend final : public Backend {
       is.psnr = st.psnr;
       on_iteration(is);
     });
-    return {false, r.peak_rss_mb};
+    return {t.resume, r.peak_rss_mb};
   }
 
   RenderOutcome render(const std::string& split, const std::string& out) override {
@@ -55,12 +58,13 @@ class FieldBackend final : public Backend {
  private:
   BackendRun run_;
   nerf::NerfOptions nerf_;
+  int checkpoint_every_;
 };
 
 }  // namespace
 
-std::unique_ptr<Backend> make_nerf_backend(BackendRun run, const nerf::NerfOptions& nerf) {
-  return std::make_unique<FieldBackend>(std::move(run), nerf);
+std::unique_ptr<Backend> make_nerf_backend(BackendRun run, const nerf::NerfOptions& nerf, int checkpoint_every) {
+  return std::make_unique<FieldBackend>(std::move(run), nerf, checkpoint_every);
 }
 
 }  // namespace weathergs::methods

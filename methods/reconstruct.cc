@@ -168,7 +168,7 @@ std::unique_ptr<Backend> make_backend(const Run& run, const Points& points) {
   if (r.backend == BackendKind::kNerf) {
     nerf::NerfOptions n = run.o.nerf;
     n.seed = run.o.train.seed;
-    return make_nerf_backend(std::move(b), n);
+    return make_nerf_backend(std::move(b), n, run.o.checkpoint_every);
   }
   return make_3dgs_backend(std::move(b), method_train_options(run.o), run.o.checkpoint_every);
 }

@@ -22,6 +22,7 @@ namespace {
 constexpr int kRunVersion = 1;
 constexpr const char* kFieldFile = "field.bin";
 constexpr const char* kRunJson = "run.json";
+constexpr const char* kCheckpointFile = "checkpoint.bin";
 constexpr double kMinNearM = 0.05;      // the generator's own near clip (capture: Cycles clip_start)
 constexpr double kDefaultNearM = 1.0;   // without SfM points
 
@@ -126,6 +127,8 @@ void NerfRunOptions::validate() const {
   if (dataset.empty()) throw InputError("nerf run options", "dataset is empty: the dataset folder is required");
   if (out.empty()) throw InputError("nerf run options", "out is empty: the run folder is required");
   inputs.validate("nerf run options: inputs");
+  if (checkpoint_every < 0)
+    throw InputError("nerf run options", "checkpoint_every is " + std::to_string(checkpoint_every) + ", must be >= 0");
   for (int it : snapshot_at)
     if (it < 1) throw InputError("nerf run options", "snapshot_at holds " + std::to_string(it) + ": must be >= 1");
   nerf.validate("nerf run options: nerf");
@@ -163,16 +166,25 @@ StageOutput nerf_run_output(const std::string& run_dir, const std::string& datas
   }
   if (!s.why.empty()) s.state = StageOutput::State::kStale;
   else if (j.value("complete", false)) s.state = StageOutput::State::kComplete;
-  return s;  // an incomplete run of these settings is absent: without checkpoints it starts over
+  else if (fs::exists(fs::path(run_dir) / kCheckpointFile)) s.state = StageOutput::State::kPartial;
+  return s;  // an incomplete run without a checkpoint is absent: it starts over
 }
 
 NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallback& on_iteration) {
   o.validate();
   const Dataset ds = read_dataset(o.dataset);
   const fs::path run(o.out);
-  if (fs::exists(run / kRunJson)) {
+  const std::string ckpt = (run / kCheckpointFile).string();
+  if (o.resume) {
+    const StageOutput s = nerf_run_output(o.out, o.dataset, o.inputs, o.nerf);
+    if (s.state == StageOutput::State::kStale)
+      throw InputError(s.record, "records other settings (" + s.why + "): resume with those, or start over with --force");
+    if (s.state != StageOutput::State::kPartial)
+      throw InputError(o.out, s.state == StageOutput::State::kComplete ? "holds a complete run: nothing to resume"
+                                                                       : "holds no checkpoint of this run: nothing to resume");
+  } else if (fs::exists(run / kRunJson)) {
     if (!o.force) throw InputError(o.out, "already holds a radiance-field run: pass force (--force) to start over");
-    for (const char* f : {kRunJson, kFieldFile, "snapshots"}) fs::remove_all(run / f);
+    for (const char* f : {kRunJson, kFieldFile, kCheckpointFile, "snapshots"}) fs::remove_all(run / f);
   } else if (fs::exists(run) && !fs::is_empty(run)) {
     throw InputError(o.out, "exists and is not a radiance-field run folder: refusing to write into it");
   }
@@ -200,8 +212,22 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   result.near_m = near;
   const FrustumFrame frame = forward_facing_frame(ds.cameras, near);
   NerfTrainer trainer(std::move(views), frame, o.nerf);
+  double seconds_before = 0;
+  std::optional<double> cpu_before = 0.0;
+  if (o.resume) {
+    const Json state = trainer.load_checkpoint(ckpt);
+    const JsonReader r(state, ckpt, "/run_state");
+    seconds_before = r.get<double>("train_seconds");
+    cpu_before = r.get_optional<double>("train_cpu_seconds");
+    r.finish();
+  }
 
-  double excluded = 0, excluded_cpu = 0;  // spent on snapshots
+  double excluded = 0, excluded_cpu = 0;  // spent on snapshots and checkpoints: not training
+  auto elapsed = [&] { return seconds_before + seconds_since(t_start) - excluded; };
+  auto elapsed_cpu = [&]() -> std::optional<double> {
+    if (!cpu_before) return std::nullopt;
+    return *cpu_before + process_cpu_seconds() - cpu_start - excluded_cpu;
+  };
   auto info_json = [&](bool complete, double seconds, std::optional<double> cpu_seconds) {
     const GridDims d = trainer.field().dims();
     RunRecord rec = settings_record(o.dataset, o.inputs, o.nerf);
@@ -217,7 +243,7 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
     rec.frame = frame;
     return run_json(rec);
   };
-  write_file_atomic((run / kRunJson).string(), info_json(false, 0, std::nullopt).dump(2) + "\n");
+  write_file_atomic((run / kRunJson).string(), info_json(false, seconds_before, cpu_before).dump(2) + "\n");
   std::vector<int> snaps;
   for (int it : o.snapshot_at)
     if (it < o.nerf.iterations) snaps.push_back(it);
@@ -227,7 +253,7 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
     if (std::find(snaps.begin(), snaps.end(), st.iteration) != snaps.end()) {
       const auto t0 = std::chrono::steady_clock::now();
       const double c0 = process_cpu_seconds();
-      const double train_s = seconds_since(t_start) - excluded;
+      const double train_s = elapsed();
       render_views(trainer.field(), ds, ds.split(o.snapshot_split), o.nerf.march,
                    nerf_snapshot_dir(o.out, st.iteration),
                    Json{{"method", o.method},
@@ -238,15 +264,28 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
       excluded += seconds_since(t0);
       excluded_cpu += process_cpu_seconds() - c0;
     }
+    if (o.checkpoint_every > 0 && st.iteration % o.checkpoint_every == 0 && st.iteration < o.nerf.iterations) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const double c0 = process_cpu_seconds();
+      const double train_s = elapsed();
+      const std::optional<double> train_cpu = elapsed_cpu();
+      Json state{{"train_seconds", train_s}};
+      if (train_cpu) state["train_cpu_seconds"] = *train_cpu;
+      trainer.save_checkpoint(ckpt, state);
+      write_file_atomic((run / kRunJson).string(), info_json(false, train_s, train_cpu).dump(2) + "\n");
+      excluded += seconds_since(t0);
+      excluded_cpu += process_cpu_seconds() - c0;
+    }
   }
-  result.train_seconds = seconds_since(t_start) - excluded;
-  result.train_cpu_seconds = process_cpu_seconds() - cpu_start - excluded_cpu;
+  result.train_seconds = elapsed();
+  result.train_cpu_seconds = elapsed_cpu();
   trainer.field().save((run / kFieldFile).string());
   result.iterations = trainer.iteration();
   result.peak_rss_mb = peak_rss_mb();
   result.lattice_points = trainer.field().dims().points();
   result.occupied_cells = trainer.field().occupied_cells();
   write_file_atomic((run / kRunJson).string(), info_json(true, result.train_seconds, result.train_cpu_seconds).dump(2) + "\n");
+  fs::remove(ckpt);
   return result;
 }
 

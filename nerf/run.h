@@ -10,7 +10,10 @@
 //   snapshots/iter_NNNNNN/  renders of `snapshot_split` at the `snapshot_at` iterations with their
 //                info.json (a field is ~100 MB, so snapshots are kept as renders, not as models);
 //                rendering them is not counted in train_seconds
-// There is no checkpoint: an incomplete run (killed part way) starts over. Every file is atomic.
+//   checkpoint.bin  the trainer's state every `checkpoint_every` iterations (nerf/trainer.h), for
+//                `resume`; about three fields' worth, so it is removed once the run is complete
+// A run killed part way resumes from its last checkpoint and ends in the same field, byte for byte, as
+// one that never stopped. Every file is atomic; writing checkpoints is not counted in train_seconds.
 #pragma once
 
 #include <functional>
@@ -30,7 +33,9 @@ struct NerfRunOptions {
   std::string dataset;
   TrainInputs inputs;
   std::string out;
-  bool force = false;  // replace a run the folder already holds
+  bool force = false;   // replace a run the folder already holds
+  bool resume = false;  // continue the incomplete run of these settings from out/checkpoint.bin
+  int checkpoint_every = 1000;  // iterations between checkpoints (0: none)
   std::vector<int> snapshot_at;
   std::string snapshot_split = "test";
   std::string method = "nerf";  // written into the snapshots' info.json
@@ -53,8 +58,8 @@ NerfRunResult train_nerf_run(const NerfRunOptions& options, const NerfIterationC
 // one resume rule of both backends (reconstruction/run.h run_output): stale when run.json is not a
 // radiance field's, or records other data ("dataset", "images", "masks_dir", ...) or any other option
 // ("options.KEY": the length, the seed, a TV weight, the lattice...), the "why" naming the first that
-// differs; complete when it is a complete run of these settings; absent otherwise (the field keeps no
-// checkpoints: an incomplete run starts over).
+// differs; complete when it is a complete run of these settings; partial when it is an incomplete one
+// with a checkpoint to resume from; absent otherwise.
 StageOutput nerf_run_output(const std::string& run_dir, const std::string& dataset, const TrainInputs& inputs,
                             const NerfOptions& options);
 

@@ -68,6 +68,14 @@ class NerfTrainer {
   const NerfOptions& options() const { return options_; }
   GridDims level_dims(int level) const;
 
+  // Checkpoint (trainer_checkpoint.cc): the field, the optimizer state, the level and the iteration,
+  // with the options that made them. A trainer built from the same views and options and restored
+  // from it steps on to the same bits as one that never stopped. `run_state` belongs to the caller
+  // (its clocks): stored as it is and returned by load_checkpoint. InputError naming the file and
+  // what differs (an option, the frame, the size).
+  void save_checkpoint(const std::string& path, const Json& run_state) const;
+  Json load_checkpoint(const std::string& path);
+
  private:
   void start_level(int level);
   void prune_unseen();

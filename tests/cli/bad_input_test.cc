@@ -151,8 +151,8 @@ void unread_options(std::vector<Case>& c) {
   c.push_back({"unread: reconstruct --nerf-options on 3DGS", json("n.json", "{}"), rc + "oracle --nerf-options $T/n.json",
                "--nerf-options", "unread"});
   c.push_back({"unread: reconstruct a 3DGS flag on a radiance field", {}, rc + "nerf --max-gaussians 1000", "--max-gaussians", "unread"});
-  c.push_back({"unread: reconstruct --checkpoint-every on a radiance field", {}, rc + "nerf --checkpoint-every 10",
-               "--checkpoint-every", "unread"});
+  c.push_back({"unread: reconstruct --checkpoint-every not below a radiance field's run", {},
+               rc + "nerf --nerf-iterations 50 --checkpoint-every 50", "--checkpoint-every", "unread"});
   c.push_back({"unread: reconstruct --iterations on a radiance field without --eval-at", {}, rc + "nerf --iterations 100",
                "--iterations", "unread"});
   c.push_back({"unread: reconstruct --led-weights without the LED", {}, rc + "3dgs --led-weights $T/led", "--led-weights", "unread"});

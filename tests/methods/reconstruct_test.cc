@@ -195,6 +195,36 @@ TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
   EXPECT_EQ(read_file(a + "/model/point_cloud.ply"), read_file(b + "/model/point_cloud.ply"));
 }
 
+// The radiance field the same way: stopped at 70 (after its checkpoint of 50, past the scale-up at
+// 30), reconstruct resumes it to the uninterrupted run's field and curve.
+TEST(ReconstructTest, AnInterruptedRadianceFieldResumesToTheSameField) {
+  TempDir tmp;
+  const std::string data = weathered_dataset(tmp);
+  const std::string c = tmp / "c", d = tmp / "d";
+  ReconstructOptions co = options(data, c, Method::kNerf);
+  co.eval_fractions = {0.5, 1.0};
+  ASSERT_FALSE(reconstruct(co).resumed);
+  EXPECT_FALSE(fs::exists(c + "/model/checkpoint.bin"));
+  struct Stop {};
+  ReconstructOptions dopt = co;
+  dopt.out = d;
+  try {
+    reconstruct(dopt, [](const reconstruction::IterationStats& st) {
+      if (st.iteration == 70) throw Stop{};
+    });
+    ADD_FAILURE() << "not interrupted";
+  } catch (const Stop&) {
+  }
+  EXPECT_TRUE(fs::exists(d + "/model/checkpoint.bin"));
+  const ReconstructResult r = reconstruct(dopt);
+  EXPECT_TRUE(r.resumed);
+  EXPECT_TRUE(read_file(c + "/model/field.bin") == read_file(d + "/model/field.bin")) << "the resumed field differs";
+  const Json cc = read_json_file(c + "/curve.json"), dc = read_json_file(d + "/curve.json");
+  ASSERT_EQ(cc.at("points").size(), 2u);
+  ASSERT_EQ(dc.at("points").size(), 2u);
+  for (size_t i = 0; i < 2; ++i) EXPECT_EQ(cc.at("points")[i].at("psnr"), dc.at("points")[i].at("psnr")) << i;
+}
+
 // --led-adapt: the LED's masks say they were adapted (detect.json's "adaptation"), and a run resumed
 // with the other choice, other adaptation options or another mask rule refuses the masks it holds
 // instead of mixing them in.

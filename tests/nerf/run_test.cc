@@ -1,6 +1,7 @@
 // Whole radiance-field runs (nerf/run.h): a finished field is reused only by a run that asks for the
 // settings it records (the data and every option, the seed included); any other setting makes it
-// stale, named, so that methods/ refuses it instead of passing an old field off as a new one.
+// stale, named, so that methods/ refuses it instead of passing an old field off as a new one. A run
+// stopped part way resumes from its checkpoint to the same bits.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -8,6 +9,7 @@
 #include <map>
 
 #include "core/atomic_file.h"
+#include "core/error.h"
 #include "core/json_reader.h"
 #include "nerf/run.h"
 #include "tests/core/test_util.h"
@@ -119,6 +121,82 @@ TEST(NerfRunTest, AFinishedFieldIsReusedOnlyWithEverySettingItRecords) {
   NerfOptions seed = o.nerf;
   seed.seed = 5;
   EXPECT_EQ(stale_because(o.dataset, o.inputs, seed), "options.seed: holds 4, asked for 5");
+}
+
+
+// Stands in for a kill: thrown from the progress callback after the step of `at`.
+struct Stopped {};
+NerfIterationCallback stop_at(int at) {
+  return [at](const NerfIterationStats& st) {
+    if (st.iteration == at) throw Stopped{};
+  };
+}
+
+TEST(NerfRunTest, AStoppedRunResumesFromItsCheckpointToTheSameField) {
+  weathergs::testing::TempDir tmp;
+  weathergs::testing::SceneOptions so;
+  so.views = 4;
+  so.width = 48, so.height = 32, so.fx = 40;
+  weathergs::testing::make_clean_dataset(tmp / "data", so);
+  copy_tree(tmp / "data/clean", tmp / "data/images");
+  NerfRunOptions o;
+  o.dataset = tmp / "data";
+  o.nerf = tiny_options();
+  o.nerf.iterations = 9;
+  o.nerf.level_scales = {0.5, 1.0};
+  o.nerf.upsample_at = {4};
+  o.checkpoint_every = 3;
+  o.snapshot_at = {5};
+  o.out = tmp / "straight";
+  train_nerf_run(o);
+  EXPECT_FALSE(fs::exists(o.out + "/checkpoint.bin")) << "a complete run keeps no checkpoint";
+  const std::string straight = read_file(o.out + "/field.bin");
+
+  o.out = tmp / "stopped";
+  // Stopped after 5: the checkpoint of 3 is on the coarse level, so the resumed run makes the scale-up.
+  EXPECT_THROW(train_nerf_run(o, stop_at(5)), Stopped);
+  const StageOutput partial = nerf_run_output(o.out, o.dataset, o.inputs, o.nerf);
+  EXPECT_EQ(partial.state, StageOutput::State::kPartial) << partial.why;
+  EXPECT_FALSE(read_json_file(o.out + "/run.json").at("complete").get<bool>());
+  EXPECT_EQ(read_json_file(o.out + "/run.json").at("iterations").get<int>(), 3);
+  // Starting over needs force; resuming with other options is refused, naming the option.
+  EXPECT_THROW(train_nerf_run(o), InputError);
+  NerfRunOptions other = o;
+  other.resume = true;
+  other.nerf.seed = 5;
+  try {
+    train_nerf_run(other);
+    ADD_FAILURE() << "resumed a run of another seed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("options.seed"), std::string::npos) << e.what();
+  }
+  o.resume = true;
+  EXPECT_THROW(train_nerf_run(o, stop_at(8)), Stopped);  // from 3 on, and stopped again past the checkpoint of 6
+  EXPECT_EQ(read_json_file(o.out + "/run.json").at("iterations").get<int>(), 6);
+  const NerfRunResult resumed = train_nerf_run(o);
+  EXPECT_EQ(resumed.iterations, 9);
+  EXPECT_TRUE(read_file(o.out + "/field.bin") == straight) << "the resumed field differs from the uninterrupted one";
+  EXPECT_FALSE(fs::exists(o.out + "/checkpoint.bin"));
+  EXPECT_TRUE(fs::exists(nerf_snapshot_dir(o.out, 5) + "/info.json"));
+  ASSERT_TRUE(resumed.train_cpu_seconds.has_value());
+  EXPECT_GT(*resumed.train_cpu_seconds, 0);
+  EXPECT_EQ(nerf_run_output(o.out, o.dataset, o.inputs, o.nerf).state, StageOutput::State::kComplete);
+  EXPECT_THROW(train_nerf_run(o), InputError) << "a complete run has nothing to resume";
+
+  // A damaged checkpoint is an error naming the file, not a silently different field.
+  o.resume = false, o.force = true;
+  EXPECT_THROW(train_nerf_run(o, stop_at(4)), Stopped);
+  const std::string ckpt = o.out + "/checkpoint.bin";
+  const std::string bytes = read_file(ckpt);
+  write_file_atomic(ckpt, bytes.substr(0, bytes.size() - 4));
+  o.resume = true, o.force = false;
+  try {
+    train_nerf_run(o);
+    ADD_FAILURE() << "resumed from a truncated checkpoint";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("checkpoint.bin"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
