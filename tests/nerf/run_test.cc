@@ -58,8 +58,8 @@ std::map<std::string, std::function<void(NerfOptions&)>> one_change_per_key() {
   };
 }
 
-TEST(NerfRunTest, AFinishedFieldIsReusedOnlyWithEverySettingItRecords) {
-  weathergs::testing::TempDir tmp;
+// A tiny clean dataset in tmp/data and a run of tiny_options on it.
+NerfRunOptions tiny_run(const weathergs::testing::TempDir& tmp) {
   weathergs::testing::SceneOptions so;
   so.views = 4;
   so.width = 48, so.height = 32, so.fx = 40;
@@ -69,6 +69,12 @@ TEST(NerfRunTest, AFinishedFieldIsReusedOnlyWithEverySettingItRecords) {
   o.dataset = tmp / "data";
   o.out = tmp / "run";
   o.nerf = tiny_options();
+  return o;
+}
+
+TEST(NerfRunTest, AFinishedFieldIsReusedOnlyWithEverySettingItRecords) {
+  weathergs::testing::TempDir tmp;
+  NerfRunOptions o = tiny_run(tmp);
   // Before and while training nothing is reusable; an incomplete run of the same settings starts over.
   EXPECT_EQ(nerf_run_output(o.out, o.dataset, o.inputs, o.nerf).state, StageOutput::State::kAbsent);
   const NerfRunResult trained = train_nerf_run(o);
@@ -134,14 +140,7 @@ NerfIterationCallback stop_at(int at) {
 
 TEST(NerfRunTest, AStoppedRunResumesFromItsCheckpointToTheSameField) {
   weathergs::testing::TempDir tmp;
-  weathergs::testing::SceneOptions so;
-  so.views = 4;
-  so.width = 48, so.height = 32, so.fx = 40;
-  weathergs::testing::make_clean_dataset(tmp / "data", so);
-  copy_tree(tmp / "data/clean", tmp / "data/images");
-  NerfRunOptions o;
-  o.dataset = tmp / "data";
-  o.nerf = tiny_options();
+  NerfRunOptions o = tiny_run(tmp);
   o.nerf.iterations = 9;
   o.nerf.level_scales = {0.5, 1.0};
   o.nerf.upsample_at = {4};
