@@ -212,17 +212,20 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   result.near_m = near;
   const FrustumFrame frame = forward_facing_frame(ds.cameras, near);
   NerfTrainer trainer(std::move(views), frame, o.nerf);
+  double excluded = 0, excluded_cpu = 0;  // spent on snapshots and checkpoints: not training
   double seconds_before = 0;
   std::optional<double> cpu_before = 0.0;
   if (o.resume) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = process_cpu_seconds();
     const Json state = trainer.load_checkpoint(ckpt);
     const JsonReader r(state, ckpt, "/run_state");
     seconds_before = r.get<double>("train_seconds");
     cpu_before = r.get_optional<double>("train_cpu_seconds");
     r.finish();
+    excluded += seconds_since(t0);
+    excluded_cpu += process_cpu_seconds() - c0;
   }
-
-  double excluded = 0, excluded_cpu = 0;  // spent on snapshots and checkpoints: not training
   auto elapsed = [&] { return seconds_before + seconds_since(t_start) - excluded; };
   auto elapsed_cpu = [&]() -> std::optional<double> {
     if (!cpu_before) return std::nullopt;
