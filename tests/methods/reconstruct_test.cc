@@ -64,6 +64,18 @@ ReconstructOptions options(const std::string& data, const std::string& out, Meth
   return o;
 }
 
+// Runs reconstruct and stops it, as a kill would, right after the training step `at`.
+void reconstruct_stopped_after(const ReconstructOptions& o, int at) {
+  struct Stop {};
+  try {
+    reconstruct(o, [at](const reconstruction::IterationStats& st) {
+      if (st.iteration == at) throw Stop{};
+    });
+    ADD_FAILURE() << "not interrupted";
+  } catch (const Stop&) {
+  }
+}
+
 // The oracle's lead over the weathered 3DGS methods on this scene after 200 iterations: measured
 // 2.36-3.46 dB (robust-3dgs to gt-masks); the margin is half of the smallest.
 constexpr double kOracleMarginDb = 1.2;
@@ -173,14 +185,7 @@ TEST(ReconstructTest, CompleteRunsAreKeptInterruptedOnesResumeToTheSameModel) {
   }
   // An interrupted run: stop b's training at iteration 120 (after the trainer's own checkpoint at
   // 100), then reconstruct again: it resumes and ends in a's model, byte for byte.
-  struct Stop {};
-  try {
-    reconstruct(options(data, b, Method::k3dgs), [](const reconstruction::IterationStats& st) {
-      if (st.iteration == 120) throw Stop{};
-    });
-    ADD_FAILURE() << "not interrupted";
-  } catch (const Stop&) {
-  }
+  reconstruct_stopped_after(options(data, b, Method::k3dgs), 120);
   EXPECT_FALSE(fs::exists(b + "/results.json"));
   // b's last checkpoint is the model at iteration 100: a's snapshot there is the same model, byte for
   // byte (snapshots neither perturb the training nor hold another iteration).
@@ -205,16 +210,9 @@ TEST(ReconstructTest, AnInterruptedRadianceFieldResumesToTheSameField) {
   co.eval_fractions = {0.5, 1.0};
   ASSERT_FALSE(reconstruct(co).resumed);
   EXPECT_FALSE(fs::exists(c + "/model/checkpoint.bin"));
-  struct Stop {};
   ReconstructOptions dopt = co;
   dopt.out = d;
-  try {
-    reconstruct(dopt, [](const reconstruction::IterationStats& st) {
-      if (st.iteration == 70) throw Stop{};
-    });
-    ADD_FAILURE() << "not interrupted";
-  } catch (const Stop&) {
-  }
+  reconstruct_stopped_after(dopt, 70);
   EXPECT_TRUE(fs::exists(d + "/model/checkpoint.bin"));
   const ReconstructResult r = reconstruct(dopt);
   EXPECT_TRUE(r.resumed);
@@ -238,14 +236,7 @@ TEST(ReconstructTest, LedAdaptationIsRecordedAndAResumeMustAskForTheSameMasks) {
   o.led_adapt->iterations = 4;
   o.led_adapt->threads = 1;
   o.led_adapt->progress = false;
-  struct Stop {};
-  try {
-    reconstruct(o, [](const reconstruction::IterationStats& st) {
-      if (st.iteration == 60) throw Stop{};  // after the checkpoint at 50
-    });
-    ADD_FAILURE() << "not interrupted";
-  } catch (const Stop&) {
-  }
+  reconstruct_stopped_after(o, 60);  // after the checkpoint at 50
   const Json d = read_json_file(run + "/detected/detect.json");
   ASSERT_TRUE(d.contains("adaptation"));
   EXPECT_EQ(d.at("adaptation").at("iterations"), 4);
