@@ -212,19 +212,25 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
   result.near_m = near;
   const FrustumFrame frame = forward_facing_frame(ds.cameras, near);
   NerfTrainer trainer(std::move(views), frame, o.nerf);
-  double excluded = 0, excluded_cpu = 0;  // spent on snapshots and checkpoints: not training
+  // Snapshots and checkpoints are not training: their wall and CPU seconds are left out of the clocks.
+  double excluded = 0, excluded_cpu = 0;
+  auto not_training = [&](const auto& work) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const double c0 = process_cpu_seconds();
+    work();
+    excluded += seconds_since(t0);
+    excluded_cpu += process_cpu_seconds() - c0;
+  };
   double seconds_before = 0;
   std::optional<double> cpu_before = 0.0;
   if (o.resume) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const double c0 = process_cpu_seconds();
-    const Json state = trainer.load_checkpoint(ckpt);
-    const JsonReader r(state, ckpt, "/run_state");
-    seconds_before = r.get<double>("train_seconds");
-    cpu_before = r.get_optional<double>("train_cpu_seconds");
-    r.finish();
-    excluded += seconds_since(t0);
-    excluded_cpu += process_cpu_seconds() - c0;
+    not_training([&] {
+      const Json state = trainer.load_checkpoint(ckpt);
+      const JsonReader r(state, ckpt, "/run_state");
+      seconds_before = r.get<double>("train_seconds");
+      cpu_before = r.get_optional<double>("train_cpu_seconds");
+      r.finish();
+    });
   }
   auto elapsed = [&] { return seconds_before + seconds_since(t_start) - excluded; };
   auto elapsed_cpu = [&]() -> std::optional<double> {
@@ -254,30 +260,26 @@ NerfRunResult train_nerf_run(const NerfRunOptions& o, const NerfIterationCallbac
     const NerfIterationStats st = trainer.step();
     if (on_iteration) on_iteration(st);
     if (std::find(snaps.begin(), snaps.end(), st.iteration) != snaps.end()) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const double c0 = process_cpu_seconds();
       const double train_s = elapsed();
-      render_views(trainer.field(), ds, ds.split(o.snapshot_split), o.nerf.march,
-                   nerf_snapshot_dir(o.out, st.iteration),
-                   Json{{"method", o.method},
-                        {"train_seconds", train_s},
-                        {"peak_rss_mb", peak_rss_mb()},
-                        {"iterations", st.iteration},
-                        {"lattice_points", st.lattice_points}});
-      excluded += seconds_since(t0);
-      excluded_cpu += process_cpu_seconds() - c0;
+      not_training([&] {
+        render_views(trainer.field(), ds, ds.split(o.snapshot_split), o.nerf.march,
+                     nerf_snapshot_dir(o.out, st.iteration),
+                     Json{{"method", o.method},
+                          {"train_seconds", train_s},
+                          {"peak_rss_mb", peak_rss_mb()},
+                          {"iterations", st.iteration},
+                          {"lattice_points", st.lattice_points}});
+      });
     }
     if (o.checkpoint_every > 0 && st.iteration % o.checkpoint_every == 0 && st.iteration < o.nerf.iterations) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const double c0 = process_cpu_seconds();
       const double train_s = elapsed();
       const std::optional<double> train_cpu = elapsed_cpu();
-      Json state{{"train_seconds", train_s}};
-      if (train_cpu) state["train_cpu_seconds"] = *train_cpu;
-      trainer.save_checkpoint(ckpt, state);
-      write_file_atomic((run / kRunJson).string(), info_json(false, train_s, train_cpu).dump(2) + "\n");
-      excluded += seconds_since(t0);
-      excluded_cpu += process_cpu_seconds() - c0;
+      not_training([&] {
+        Json state{{"train_seconds", train_s}};
+        if (train_cpu) state["train_cpu_seconds"] = *train_cpu;
+        trainer.save_checkpoint(ckpt, state);
+        write_file_atomic((run / kRunJson).string(), info_json(false, train_s, train_cpu).dump(2) + "\n");
+      });
     }
   }
   result.train_seconds = elapsed();
