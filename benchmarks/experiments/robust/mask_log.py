@@ -85,12 +85,17 @@ def weather_mask(data, view):
     return mask
 
 
-def write_figure(path, data, renders, view, tau):
+def view_masks(data, renders, view, tau):
+    """A training view's render, weathered and clean images, its weather mask and what the rule excludes."""
     render = load(os.path.join(renders, view + ".png"))
     weathered = load(os.path.join(data, "images", view + ".png"))
     clean = load(os.path.join(data, "clean", view + ".png"))
-    weather = weather_mask(data, view)
     excluded = ~kept_mask(np.abs(render - weathered).mean(axis=2), tau)
+    return render, weathered, clean, weather_mask(data, view), excluded
+
+
+def write_figure(path, data, renders, view, tau):
+    render, weathered, clean, weather, excluded = view_masks(data, renders, view, tau)
     mask = np.zeros_like(render)
     mask[excluded & weather] = (1, 0, 0)
     mask[excluded & ~weather] = (0, 1, 0)
@@ -144,20 +149,16 @@ def main(argv):
                             "--split", "train", "--out", out], check=True)
         if figure and run == runs[0]:
             write_figure(figure, data, out, views[min(3, len(views) - 1)], tau)
-        tot = {k: 0.0 for k in ("px", "excl", "part", "tp", "scene", "scene_excl", "err_kept", "err_excl", "signed_excl", "grad_excl", "grad_all")}
+        tot = {k: 0.0 for k in ("px", "excl", "weather", "tp", "scene", "scene_excl", "err_kept", "err_excl", "signed_excl", "grad_excl", "grad_all")}
         for v in views:
-            render = load(os.path.join(out, v + ".png"))
-            weathered = load(os.path.join(data, "images", v + ".png"))
-            clean = load(os.path.join(data, "clean", v + ".png"))
-            particle = weather_mask(data, v)
-            excluded = ~kept_mask(np.abs(render - weathered).mean(axis=2), tau)
-            scene = ~particle
+            render, _, clean, weather, excluded = view_masks(data, out, v, tau)
+            scene = ~weather
             err_clean = np.abs(render - clean).mean(axis=2)
             grad = gradient_magnitude(clean)
             tot["px"] += excluded.size
             tot["excl"] += excluded.sum()
-            tot["part"] += particle.sum()
-            tot["tp"] += (excluded & particle).sum()
+            tot["weather"] += weather.sum()
+            tot["tp"] += (excluded & weather).sum()
             tot["scene"] += scene.sum()
             tot["scene_excl"] += (excluded & scene).sum()
             tot["err_kept"] += err_clean[~excluded & scene].sum()
@@ -168,8 +169,8 @@ def main(argv):
         t = tot
         kept_scene = t["scene"] - t["scene_excl"]
         detail = (t["grad_excl"] / max(t["scene_excl"], 1)) / (t["grad_all"] / t["px"])
-        print(f"| {os.path.basename(os.path.normpath(run))} | {tau:.4f} | {t['excl'] / t['px']:.3f} | {t['part'] / t['px']:.3f} | "
-              f"{t['tp'] / max(t['excl'], 1):.3f} | {t['tp'] / max(t['part'], 1):.3f} | {t['scene_excl'] / t['scene']:.3f} | "
+        print(f"| {os.path.basename(os.path.normpath(run))} | {tau:.4f} | {t['excl'] / t['px']:.3f} | {t['weather'] / t['px']:.3f} | "
+              f"{t['tp'] / max(t['excl'], 1):.3f} | {t['tp'] / max(t['weather'], 1):.3f} | {t['scene_excl'] / t['scene']:.3f} | "
               f"{t['err_kept'] / max(kept_scene, 1):.4f} / {t['err_excl'] / max(t['scene_excl'], 1):.4f} | {t['signed_excl'] / max(t['scene_excl'], 1):+.4f} | {detail:.2f} |")
 
 
