@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# What separates perfect masks from the oracle (docs/results.md, "Perfect masks are not the oracle"), on
+# What separates perfect masks from the oracle (docs/carryover.md, "Perfect masks are not the oracle"), on
 # a tuning scene, never the benchmark's: 3DGS at the fast schedule, seed 0, one thread a run, in the four
 # cells of {weathered images with the true particle and lens masks out of the loss, clean images} x
 # {SfM points of the weathered views (sparse/0), of the clean views (sparse_clean/0)}:
