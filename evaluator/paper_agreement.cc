@@ -280,23 +280,19 @@ std::string render_agreement(const PaperTables& ours, const PublishedTables& pap
     if (c.method == "weathergs-nerf") nerf = &c;
     if (c.method == "weathergs") gs = &c;
   }
+  // Wall seconds grow when other jobs share the cores, CPU seconds do not: the training ratio reads
+  // the CPU seconds when both methods record them, so that it does not depend on what ran beside.
+  const bool cpu = nerf && gs && std::isfinite(nerf->train_cpu_seconds) && std::isfinite(gs->train_cpu_seconds);
   struct Ratio { const char* what; double paper; double CostRow::*field; };
-  for (const Ratio& q : {Ratio{"training time", paper.nerf_train_min / paper.gs_train_min, &CostRow::train_seconds},
+  for (const Ratio& q : {Ratio{cpu ? "training time (ours: CPU seconds)" : "training time",
+                               paper.nerf_train_min / paper.gs_train_min,
+                               cpu ? &CostRow::train_cpu_seconds : &CostRow::train_seconds},
                          Ratio{"render time per view", paper.nerf_render_s / paper.gs_render_s, &CostRow::render_ms_per_view},
                          Ratio{"memory (paper: GPU; ours: peak resident set)", paper.nerf_memory_gb / paper.gs_memory_gb,
                                &CostRow::peak_rss_mb}}) {
-    // Wall seconds grow when other jobs share the cores, CPU seconds do not: the training ratio reads
-    // the CPU seconds when both methods record them, so that it does not depend on what ran beside.
-    double CostRow::*field = q.field;
-    std::string what = q.what;
-    if (field == &CostRow::train_seconds && nerf && gs && std::isfinite(nerf->train_cpu_seconds) &&
-        std::isfinite(gs->train_cpu_seconds)) {
-      field = &CostRow::train_cpu_seconds;
-      what += " (ours: CPU seconds)";
-    }
-    Row row{"weathergs-nerf / weathergs, " + what, fmt(q.paper, 1) + "x", "", "not run"};
-    if (nerf && gs && std::isfinite(nerf->*field) && std::isfinite(gs->*field) && gs->*field > 0) {
-      const double r = nerf->*field / (gs->*field);
+    Row row{std::string("weathergs-nerf / weathergs, ") + q.what, fmt(q.paper, 1) + "x", "", "not run"};
+    if (nerf && gs && std::isfinite(nerf->*q.field) && std::isfinite(gs->*q.field) && gs->*q.field > 0) {
+      const double r = nerf->*q.field / (gs->*q.field);
       row.ours = fmt(r, 1) + "x";
       row.verdict = (r > 1) == (q.paper > 1) ? "reproduced" : "not reproduced";
     }

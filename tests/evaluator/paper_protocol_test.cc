@@ -122,6 +122,14 @@ std::string published_json() {
   return j.dump();
 }
 
+// The agreement section of `rs` against published_json().
+std::string agreement(const std::vector<LoadedResults>& rs) {
+  testing::TempDir dir;
+  const std::string path = (std::filesystem::path(dir.path()) / "paper.json").string();
+  write_file_atomic(path, published_json());
+  return render_agreement(build_paper_tables(rs), read_published_tables(path));
+}
+
 TEST(PaperAgreementTest, RankingsAndReadingsAgainstThePublishedTables) {
   testing::TempDir dir;
   const std::string path = (std::filesystem::path(dir.path()) / "paper.json").string();
@@ -154,10 +162,7 @@ TEST(PaperAgreementTest, AnIntervalContainingZeroIsUnresolved) {
     rs.push_back({"a" + std::to_string(seed), make("3dgs", "pool", "snow", 20, seed)});
     rs.push_back({"b" + std::to_string(seed), make("weathergs", "pool", "snow", 20 + (seed - 1) * 1.0, seed)});
   }
-  testing::TempDir dir;
-  const std::string path = (std::filesystem::path(dir.path()) / "paper.json").string();
-  write_file_atomic(path, published_json());
-  const std::string md = render_agreement(build_paper_tables(rs), read_published_tables(path));
+  const std::string md = agreement(rs);
   EXPECT_NE(md.find("| weathergs − 3dgs, snow (PSNR) | +2.00 dB | +0.00 ± 2.48 dB (3 pairs) | unresolved"), std::string::npos) << md;
 }
 
@@ -173,10 +178,7 @@ TEST(PaperAgreementTest, TheAblationOrderOverTheVariantsBothRan) {
   }
   rs.push_back({"", make("weathergs-no-led", "pool", "rain+lens_droplets", 24, 0)});
   rs.push_back({"", make("weathergs-no-led", "tanabata", "rain+lens_droplets", 22, 0)});
-  testing::TempDir dir;
-  const std::string path = (std::filesystem::path(dir.path()) / "paper.json").string();
-  write_file_atomic(path, published_json());
-  const std::string md = render_agreement(build_paper_tables(rs), read_published_tables(path));
+  const std::string md = agreement(rs);
   // no-led 23.00 (pool 24, tanabata 22) against no-aef 19.00 on the same two: the paper's order reversed.
   EXPECT_NE(md.find("| without the LED worse than without the AEF (PSNR, all variants) | 23.00 < 24.00 | "
                     "23.00 ≥ 19.00 (the 2 variants both ran) | not reproduced |"),
@@ -196,10 +198,7 @@ TEST(PaperAgreementTest, TheTrainingRatioReadsCpuSecondsWhereRecorded) {
     r.method_info["train_cpu_seconds"] = nerf ? 1050.0 : 700.0;
     rs.push_back({"", r});
   }
-  testing::TempDir dir;
-  const std::string path = (std::filesystem::path(dir.path()) / "paper.json").string();
-  write_file_atomic(path, published_json());
-  const std::string md = render_agreement(build_paper_tables(rs), read_published_tables(path));
+  const std::string md = agreement(rs);
   EXPECT_NE(md.find("| weathergs-nerf / weathergs, training time (ours: CPU seconds) | 14.1x | 1.5x | reproduced |"),
             std::string::npos)
       << md;
