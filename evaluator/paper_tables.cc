@@ -322,8 +322,9 @@ std::string cost_label(const CostRow& r) { return r.reference ? r.method + " (re
 const char* kCostNote =
     "Mean over each method's runs (all variants and seeds; training time with its standard deviation). "
     "Training: the optimisation only (3DGS, or the radiance field for the NeRF-family methods), wall seconds, "
-    "which grow when other jobs share the cores; Training CPU: its CPU seconds over every thread, which do "
-    "not (empty unless every run records them); AEF + LED: "
+    "which grow when other jobs share the cores; Training CPU: its CPU seconds over every thread, which grow "
+    "less but not to nothing, so compare runs made under the same load (empty unless every run records "
+    "them); AEF + LED: "
     "the particle filter and the lens detector before it; render: per test view; "
     "peak memory: the training process's peak resident set.";
 
