@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <sstream>
 
@@ -55,7 +56,36 @@ std::vector<int> best_matches(const Matrix& dots, const SiftMatchOptions& o) {
   return best;
 }
 
+// COLMAP 3.8's SIFT extraction (first octave, octaves, levels per octave) and VLFeat's refined-level
+// range: at least its s_min, below the top detection level plus the refinement's limit of 1.5.
+constexpr int kFirstOctave = -1, kNumOctaves = 4, kLevels = 3;
+constexpr double kLevelMin = -1.0, kLevelMax = (kLevels - 1) + 1.5;
+// Keypoints are stored in float32: a boundary case counts as possible.
+constexpr double kSlack = 1e-3;
+
+// The scale of each keypoint: COLMAP stores (x, y, scale, orientation) or (x, y, a11, a12, a21, a22)
+// with the affine columns of length `scale`.
+double keypoint_scale(const float* k, int cols) { return cols == 4 ? double(k[2]) : std::hypot(double(k[2]), double(k[4])); }
+
 }  // namespace
+
+bool sift_descriptor_may_be_unwritten(double x, double y, double scale, int width, int height) {
+  if (!(scale > 0)) return false;
+  const double sigma0 = 1.6 * std::pow(2.0, 1.0 / kLevels);
+  bool any_octave = false;
+  for (int o = kFirstOctave; o < kFirstOctave + kNumOctaves; ++o) {
+    const double per = std::ldexp(1.0, o);
+    const double level = kLevels * std::log2(scale / (sigma0 * per));
+    if (level < kLevelMin - kSlack || level >= kLevelMax + kSlack) continue;
+    any_octave = true;
+    // VLFeat's octave size (VL_SHIFT_LEFT) and its descriptor's bounds check: (int)(c + 0.5) >= w for
+    // x, >= h - 1 for y, in the octave's pixels, where VLFeat's pixel centres are COLMAP's minus 0.5.
+    const int w = o < 0 ? width << -o : width >> o, h = o < 0 ? height << -o : height >> o;
+    const double xo = (x - 0.5) / per, yo = (y - 0.5) / per;
+    if (xo + 0.5 < w - kSlack && yo + 0.5 < h - 1 - kSlack) return false;
+  }
+  return any_octave;
+}
 
 void SiftMatchOptions::validate() const {
   const std::string where = "sift match options";
@@ -89,12 +119,18 @@ std::vector<std::pair<int, int>> match_sift_descriptors(const SiftDescriptors& a
 int64_t write_exhaustive_match_list(const std::string& db_path, const std::string& list_path, const SiftMatchOptions& o) {
   o.validate();
   std::map<int, std::string> names;
+  std::map<int, int> camera_of;
+  std::map<int, std::pair<int, int>> sizes;  // camera id -> (width, height)
   std::map<int, SiftDescriptors> desc;
   const ColmapDatabase db(db_path);
-  db.query("SELECT image_id, name FROM images;", [&](sqlite3_stmt* st) {
+  db.query("SELECT image_id, name, camera_id FROM images;", [&](sqlite3_stmt* st) {
     const unsigned char* name = sqlite3_column_text(st, 1);
     if (!name) throw InputError(db_path, "an image row without a name");
     names[sqlite3_column_int(st, 0)] = reinterpret_cast<const char*>(name);
+    camera_of[sqlite3_column_int(st, 0)] = sqlite3_column_int(st, 2);
+  });
+  db.query("SELECT camera_id, width, height FROM cameras;", [&](sqlite3_stmt* st) {
+    sizes[sqlite3_column_int(st, 0)] = {sqlite3_column_int(st, 1), sqlite3_column_int(st, 2)};
   });
   db.query("SELECT image_id, rows, cols, data FROM descriptors;", [&](sqlite3_stmt* st) {
     const int id = sqlite3_column_int(st, 0), rows = sqlite3_column_int(st, 1), cols = sqlite3_column_int(st, 2);
@@ -107,6 +143,30 @@ int64_t write_exhaustive_match_list(const std::string& db_path, const std::strin
     SiftDescriptors& d = desc[id];
     d.rows = rows;
     d.data.assign(blob, blob + bytes);
+  });
+  // A descriptor that may be unwritten becomes zeros: a non-positive dot product is never a match,
+  // nor anyone's best or second best, so the keypoint is as if absent and the others match as before.
+  db.query("SELECT image_id, rows, cols, data FROM keypoints;", [&](sqlite3_stmt* st) {
+    const int id = sqlite3_column_int(st, 0), rows = sqlite3_column_int(st, 1), cols = sqlite3_column_int(st, 2);
+    const auto d = desc.find(id);
+    if (rows == 0 || d == desc.end()) return;
+    if (rows != d->second.rows)
+      throw InputError(db_path, "image " + std::to_string(id) + " has " + std::to_string(rows) + " keypoints and " +
+                                    std::to_string(d->second.rows) + " descriptors");
+    if (cols != 4 && cols != 6)
+      throw InputError(db_path, "keypoints of image " + std::to_string(id) + " have " + std::to_string(cols) +
+                                    " columns, expected 4 or 6 (SIFT with a scale)");
+    if (sqlite3_column_bytes(st, 3) != rows * cols * int(sizeof(float)))
+      throw InputError(db_path, "keypoint blob of image " + std::to_string(id) + " has the wrong size");
+    const auto camera = sizes.find(camera_of.count(id) ? camera_of.at(id) : -1);
+    if (camera == sizes.end()) throw InputError(db_path, "image " + std::to_string(id) + " has no camera row");
+    std::vector<float> k(size_t(rows) * size_t(cols));
+    std::memcpy(k.data(), sqlite3_column_blob(st, 3), k.size() * sizeof(float));
+    for (int r = 0; r < rows; ++r) {
+      const float* p = k.data() + size_t(r) * size_t(cols);
+      if (sift_descriptor_may_be_unwritten(p[0], p[1], keypoint_scale(p, cols), camera->second.first, camera->second.second))
+        std::fill_n(d->second.data.begin() + int64_t(r) * kDim, kDim, uint8_t(0));
+    }
   });
   std::vector<int> ids;
   for (const auto& [id, name] : names) ids.push_back(id);

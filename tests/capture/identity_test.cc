@@ -115,12 +115,31 @@ TEST(SiftMatcherTest, AmbiguousAndOneSidedMatchesAreRejected) {
   EXPECT_TRUE(match_sift_descriptors(make({x}), make({z}), strict).empty());
 }
 
-// A COLMAP-like database with the two tables the matcher reads.
-void write_database(const std::string& path, const std::vector<SiftDescriptors>& images) {
+struct Keypoint {
+  float x = 300, y = 200, scale = 2.7f;  // COLMAP's coordinates, on a 600 x 400 camera
+};
+
+void insert_blob(sqlite3* db, const char* sql, int id, int rows, const void* data, int bytes) {
+  sqlite3_stmt* st = nullptr;
+  ASSERT_EQ(sqlite3_prepare_v2(db, sql, -1, &st, nullptr), SQLITE_OK);
+  sqlite3_bind_int(st, 1, id);
+  sqlite3_bind_int(st, 2, rows);
+  sqlite3_bind_blob(st, 3, data, bytes, SQLITE_TRANSIENT);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
+  sqlite3_finalize(st);
+}
+
+// A COLMAP-like database with the tables the matcher reads; keypoints[i] places image i's keypoints
+// (all at the centre where it is missing), stored as COLMAP's affine (x, y, a11, a12, a21, a22).
+void write_database(const std::string& path, const std::vector<SiftDescriptors>& images,
+                    const std::vector<std::vector<Keypoint>>& keypoints = {}) {
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
   ASSERT_EQ(sqlite3_exec(db,
                          "CREATE TABLE images (image_id INTEGER PRIMARY KEY, name TEXT, camera_id INTEGER);"
+                         "CREATE TABLE cameras (camera_id INTEGER PRIMARY KEY, width INTEGER, height INTEGER);"
+                         "INSERT INTO cameras VALUES (1, 600, 400);"
+                         "CREATE TABLE keypoints (image_id INTEGER PRIMARY KEY, rows INTEGER, cols INTEGER, data BLOB);"
                          "CREATE TABLE descriptors (image_id INTEGER PRIMARY KEY, rows INTEGER, cols INTEGER, data BLOB);",
                          nullptr, nullptr, nullptr),
             SQLITE_OK);
@@ -129,13 +148,14 @@ void write_database(const std::string& path, const std::vector<SiftDescriptors>&
     const int id = int(images.size() - i);
     const std::string sql = "INSERT INTO images VALUES (" + std::to_string(id) + ", 'v" + std::to_string(i) + ".png', 1);";
     ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK);
-    sqlite3_stmt* st = nullptr;
-    ASSERT_EQ(sqlite3_prepare_v2(db, "INSERT INTO descriptors VALUES (?, ?, 128, ?);", -1, &st, nullptr), SQLITE_OK);
-    sqlite3_bind_int(st, 1, id);
-    sqlite3_bind_int(st, 2, images[i].rows);
-    sqlite3_bind_blob(st, 3, images[i].data.data(), int(images[i].data.size()), SQLITE_TRANSIENT);
-    ASSERT_EQ(sqlite3_step(st), SQLITE_DONE);
-    sqlite3_finalize(st);
+    insert_blob(db, "INSERT INTO descriptors VALUES (?, ?, 128, ?);", id, images[i].rows, images[i].data.data(),
+                int(images[i].data.size()));
+    std::vector<float> k;
+    for (int r = 0; r < images[i].rows; ++r) {
+      const Keypoint p = i < keypoints.size() && size_t(r) < keypoints[i].size() ? keypoints[i][size_t(r)] : Keypoint{};
+      k.insert(k.end(), {p.x, p.y, p.scale, 0.f, 0.f, p.scale});
+    }
+    insert_blob(db, "INSERT INTO keypoints VALUES (?, ?, 6, ?);", id, images[i].rows, k.data(), int(k.size() * sizeof(float)));
   }
   sqlite3_close(db);
 }
@@ -165,6 +185,35 @@ TEST(SiftMatcherTest, MatchListIsTheSameWithOneAndTwoThreads) {
   EXPECT_EQ(read_file(tmp / "m1.txt"), read_file(tmp / "m2.txt"));
   // Pairs in increasing image id: image 1 is v5.png, so the first block is "v5.png v4.png".
   EXPECT_EQ(read_file(tmp / "m1.txt").rfind("v5.png v4.png\n", 0), 0u);
+}
+
+// Keypoints measured in paper pool_rain (600 x 400): the first two are on octave 0's last row, and
+// their stored descriptors differed in each of five extractions of the same images; the third fits
+// octave 0 or 1, and only octave 1 would refuse it: its descriptor repeated in all five.
+TEST(SiftMatcherTest, KeypointsWhoseDescriptorMayBeUnwrittenAreKnown) {
+  EXPECT_TRUE(sift_descriptor_may_be_unwritten(394.59634, 399.18218, 2.72, 600, 400));
+  EXPECT_TRUE(sift_descriptor_may_be_unwritten(219.00104, 399.09445, 2.70, 600, 400));
+  EXPECT_FALSE(sift_descriptor_may_be_unwritten(410.73044, 397.7337, 3.20, 600, 400));
+  EXPECT_FALSE(sift_descriptor_may_be_unwritten(300, 200, 2.70, 600, 400));
+  EXPECT_FALSE(sift_descriptor_may_be_unwritten(394.6, 398.5, 2.72, 600, 400));  // a row above: written
+  // The upsampled octave -1 (small scales) refuses only its own last row.
+  EXPECT_TRUE(sift_descriptor_may_be_unwritten(100, 399.9, 1.2, 600, 400));
+  EXPECT_FALSE(sift_descriptor_may_be_unwritten(100, 399.4, 1.2, 600, 400));
+}
+
+TEST(SiftMatcherTest, AKeypointWhoseDescriptorMayBeUnwrittenNeverMatches) {
+  TempDir tmp;
+  std::mt19937 rng(13);
+  std::vector<std::vector<uint8_t>> rows;
+  for (int i = 0; i < 20; ++i) rows.push_back(random_descriptor(rng));
+  const std::vector<SiftDescriptors> images = {make(rows), make(rows)};
+  write_database(tmp / "centre.db", images);
+  // Keypoint 0 of the second image on octave 0's last row; its descriptor is unchanged.
+  write_database(tmp / "edge.db", images, {{}, {Keypoint{394.59634f, 399.18218f, 2.72f}}});
+  EXPECT_EQ(write_exhaustive_match_list(tmp / "centre.db", tmp / "centre.txt", SiftMatchOptions{}), 20);
+  EXPECT_EQ(write_exhaustive_match_list(tmp / "edge.db", tmp / "edge.txt", SiftMatchOptions{}), 19);
+  EXPECT_EQ(read_file(tmp / "edge.txt").find("\n0 0\n"), std::string::npos);
+  EXPECT_NE(read_file(tmp / "edge.txt").find("\n1 1\n"), std::string::npos);
 }
 
 bool have_tools() { return !find_executable("blender").empty() && !find_executable("colmap").empty(); }
