@@ -1,6 +1,6 @@
 // Deterministic exhaustive matching of the SIFT descriptors COLMAP extracted, in place of COLMAP
 // 3.8's CPU exhaustive_matcher, which differs between runs on one database even with one thread
-// (docs/scenes.md, "Repeatability"). The rule is COLMAP's own (SiftMatchingOptions: mutual nearest
+// (docs/determinism.md). The rule is COLMAP's own (SiftMatchingOptions: mutual nearest
 // neighbours by descriptor angle, ratio 0.8, angle 0.7), computed so that every run on any machine
 // gives the same matches: the dot products of the uint8 descriptors are sums of at most 128
 // products <= 255^2, so they are exact integers below 2^24 in float32 whatever the summation order,
