@@ -116,13 +116,20 @@ void check_identity(const SceneSpec& scene, const std::string& variant, const Ge
     const std::string first = first_difference(found_id, want_id).value_or("?");
     check["expected"] = want->identity.sha256;
     check["first_difference"] = first;
+    // A render that differs is kept in the cache and would be reused by every later run: say where it is.
+    const bool render = first.rfind("clean/", 0) == 0 || first.rfind("depth/", 0) == 0;
     if (!o.allow_identity_mismatch)
       throw InputError(path, name + " (" + o.profile + " profile) is not the benchmark's dataset: identity " +
                                  id.sha256.substr(0, 12) + " where " + want->identity.sha256.substr(0, 12) +
                                  " is expected; first difference: " + first + ". Expected made with " +
                                  describe(want->made_with) + " (weathergs " + want->weathergs_commit + "), found " +
-                                 describe(found) +
-                                 ". Pass --allow-identity-mismatch to keep this dataset anyway (its dataset.json says so)");
+                                 describe(found) + "." +
+                                 (render ? " The clean render comes from the cache entry " + s.cache_entry +
+                                               ", which later runs reuse; Cycles can round a pixel one level "
+                                               "differently in another process (docs/determinism.md): remove that "
+                                               "folder to render the variant again."
+                                         : "") +
+                                 " Pass --allow-identity-mismatch to keep this dataset anyway (its dataset.json says so)");
     s.identity_check = "mismatch allowed";
   }
   check["result"] = s.identity_check;

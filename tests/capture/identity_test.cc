@@ -278,11 +278,20 @@ TEST(GenerateIdentityTest, ADifferentDatasetIsRefusedUnlessAllowed) {
   EXPECT_NE(r.output.find("first difference: sparse/0/points3D.txt differs"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("found Blender 3.4.1, COLMAP 3.8"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(tmp / "refused")) << "a refused dataset is not left behind";
+  EXPECT_EQ(r.output.find("cache entry"), std::string::npos) << "the render is not at fault here: " << r.output;
   r = testing::run_command(generate_command(scene, 2, tmp / "cache", tmp / "kept", "--allow-identity-mismatch"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Json check = dataset_json(tmp / "kept")["generator"]["identity_check"];
   EXPECT_EQ(check["result"], "mismatch allowed");
   EXPECT_EQ(check["first_difference"], "sparse/0/points3D.txt differs");
+  // A clean view that differs: the cached render is named, since every later run would reuse it.
+  files["clean/000.png"] = std::string(64, '0');
+  write_file_atomic(tmp / "scenes/expected/tiny.json", expected.dump(1));
+  r = testing::run_command(generate_command(scene, 2, tmp / "cache", tmp / "refused"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("first difference: clean/000.png differs"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("The clean render comes from the cache entry " + std::string(tmp / "cache")), std::string::npos)
+      << r.output;
   // Other settings than the expected entry's (another weather seed) are not checked, and say so.
   r = testing::run_command(generate_command(scene, 2, tmp / "cache", tmp / "seed8", "--seed 8"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
