@@ -69,7 +69,7 @@ double keypoint_scale(const float* k, int cols) { return cols == 4 ? double(k[2]
 
 }  // namespace
 
-bool sift_descriptor_may_be_unwritten(double x, double y, double scale, int width, int height) {
+bool sift_descriptor_unwritten(double x, double y, double scale, int width, int height) {
   if (!(scale > 0)) return false;
   const double sigma0 = 1.6 * std::pow(2.0, 1.0 / kLevels);
   bool any_octave = false;
@@ -144,7 +144,7 @@ int64_t write_exhaustive_match_list(const std::string& db_path, const std::strin
     d.rows = rows;
     d.data.assign(blob, blob + bytes);
   });
-  // A descriptor that may be unwritten becomes zeros: a non-positive dot product is never a match,
+  // An unwritten descriptor becomes zeros: a non-positive dot product is never a match,
   // nor anyone's best or second best, so the keypoint is as if absent and the others match as before.
   db.query("SELECT image_id, rows, cols, data FROM keypoints;", [&](sqlite3_stmt* st) {
     const int id = sqlite3_column_int(st, 0), rows = sqlite3_column_int(st, 1), cols = sqlite3_column_int(st, 2);
@@ -164,7 +164,7 @@ int64_t write_exhaustive_match_list(const std::string& db_path, const std::strin
     std::memcpy(k.data(), sqlite3_column_blob(st, 3), k.size() * sizeof(float));
     for (int r = 0; r < rows; ++r) {
       const float* p = k.data() + size_t(r) * size_t(cols);
-      if (sift_descriptor_may_be_unwritten(p[0], p[1], keypoint_scale(p, cols), camera->second.first, camera->second.second))
+      if (sift_descriptor_unwritten(p[0], p[1], keypoint_scale(p, cols), camera->second.first, camera->second.second))
         std::fill_n(d->second.data.begin() + int64_t(r) * kDim, kDim, uint8_t(0));
     }
   });

@@ -190,18 +190,18 @@ TEST(SiftMatcherTest, MatchListIsTheSameWithOneAndTwoThreads) {
 // Keypoints measured in paper pool_rain (600 x 400): the first two are on octave 0's last row, and
 // their stored descriptors differed in each of five extractions of the same images; the third fits
 // octave 0 or 1, and only octave 1 would refuse it: its descriptor repeated in all five.
-TEST(SiftMatcherTest, KeypointsWhoseDescriptorMayBeUnwrittenAreKnown) {
-  EXPECT_TRUE(sift_descriptor_may_be_unwritten(394.59634, 399.18218, 2.72, 600, 400));
-  EXPECT_TRUE(sift_descriptor_may_be_unwritten(219.00104, 399.09445, 2.70, 600, 400));
-  EXPECT_FALSE(sift_descriptor_may_be_unwritten(410.73044, 397.7337, 3.20, 600, 400));
-  EXPECT_FALSE(sift_descriptor_may_be_unwritten(300, 200, 2.70, 600, 400));
-  EXPECT_FALSE(sift_descriptor_may_be_unwritten(394.6, 398.5, 2.72, 600, 400));  // a row above: written
+TEST(SiftMatcherTest, UnwrittenDescriptorsAreKnown) {
+  EXPECT_TRUE(sift_descriptor_unwritten(394.59634, 399.18218, 2.72, 600, 400));
+  EXPECT_TRUE(sift_descriptor_unwritten(219.00104, 399.09445, 2.70, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(410.73044, 397.7337, 3.20, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(300, 200, 2.70, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(394.6, 398.5, 2.72, 600, 400));  // a row above: written
   // The upsampled octave -1 (small scales) refuses only its own last row.
-  EXPECT_TRUE(sift_descriptor_may_be_unwritten(100, 399.9, 1.2, 600, 400));
-  EXPECT_FALSE(sift_descriptor_may_be_unwritten(100, 399.4, 1.2, 600, 400));
+  EXPECT_TRUE(sift_descriptor_unwritten(100, 399.9, 1.2, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(100, 399.4, 1.2, 600, 400));
 }
 
-TEST(SiftMatcherTest, AKeypointWhoseDescriptorMayBeUnwrittenNeverMatches) {
+TEST(SiftMatcherTest, AKeypointWithAnUnwrittenDescriptorNeverMatches) {
   TempDir tmp;
   std::mt19937 rng(13);
   std::vector<std::vector<uint8_t>> rows;
