@@ -138,13 +138,15 @@ CarryOver carry_over(const std::string& from_dir, const std::string& to_dir, con
 
 std::string render_carry_over(const CarryOver& c) {
   std::ostringstream o;
-  o << "From `" << c.from_dir << "` (" << c.from_runs << " runs) to `" << c.to_dir << "` (" << c.to_runs
-    << " runs). Per variant, a difference is the mean over the seeds where both methods ran of (A - B); the sign "
+  auto runs = [](int n) { return std::to_string(n) + (n == 1 ? " run" : " runs"); };
+  o << "From `" << c.from_dir << "` (" << runs(c.from_runs) << ") to `" << c.to_dir << "` (" << runs(c.to_runs)
+    << "). Per variant, a difference is the mean over the seeds where both methods ran of (A - B); the sign "
        "test counts the target's variants whose difference has the sign of the source's mean (one-sided, p = "
        "P(X >= k), X ~ Binomial(n, 1/2), holds at p < "
     << num("%.2f", kCarryOverAlpha) << "); size = target mean / source mean.\n\n";
-  o << "| A - B | metric | variants | source mean | target mean | size | same sign | p | verdict |\n";
-  o << "|---|---|---|---|---|---|---|---|---|\n";
+  if (c.rows.empty()) o << "No paired difference has both methods in both suites yet.\n";
+  if (!c.rows.empty()) o << "| A - B | metric | variants | source mean | target mean | size | same sign | p | verdict |\n"
+                            "|---|---|---|---|---|---|---|---|---|\n";
   for (const CarryOverRow& r : c.rows) {
     const bool psnr = r.metric == "psnr";
     const char* f = psnr ? "%+.2f dB" : "%+.4f";

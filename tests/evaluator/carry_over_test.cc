@@ -108,6 +108,22 @@ TEST(CarryOverTest, PerVariantDifferencesSignTestAndVerdicts) {
   EXPECT_EQ(row(all, "weathergs", "3dgs", "psnr").verdict, "holds: same sign on 6 of 6");
 }
 
+// A target suite that has begun: one run, so no pair yet. The page says so instead of an empty table.
+TEST(CarryOverTest, ATargetWithNoPairYetSaysSo) {
+  TempDir tmp;
+  const std::string from = tmp / "quick", to = tmp / "paper";
+  put(from, "pool_rain", "3dgs", 0, 20);
+  put(from, "pool_rain", "weathergs", 0, 25);
+  put(to, "pool_rain", "weathergs", 0, 24);
+  const CarryOver c = carry_over(from, to, {{"weathergs", "3dgs"}});
+  EXPECT_TRUE(c.rows.empty());
+  const std::string md = render_carry_over(c);
+  EXPECT_NE(md.find("(1 run). Per variant"), std::string::npos) << md;
+  EXPECT_NE(md.find("No paired difference has both methods in both suites yet."), std::string::npos) << md;
+  EXPECT_EQ(md.find("| A - B |"), std::string::npos) << md;
+  EXPECT_NE(md.find("- weathergs - 3dgs: no variant where both suites ran both methods"), std::string::npos) << md;
+}
+
 TEST(CarryOverTest, RefusesEmptyFoldersBadPairsAndMixedRecipes) {
   TempDir tmp;
   const std::string from = tmp / "quick", to = tmp / "paper";
