@@ -144,9 +144,11 @@ std::string render_carry_over(const CarryOver& c) {
        "test counts the target's variants whose difference has the sign of the source's mean (one-sided, p = "
        "P(X >= k), X ~ Binomial(n, 1/2), holds at p < "
     << num("%.2f", kCarryOverAlpha) << "); size = target mean / source mean.\n\n";
-  if (c.rows.empty()) o << "No paired difference has both methods in both suites yet.\n";
-  if (!c.rows.empty()) o << "| A - B | metric | variants | source mean | target mean | size | same sign | p | verdict |\n"
-                            "|---|---|---|---|---|---|---|---|---|\n";
+  if (c.rows.empty())
+    o << "No paired difference has both methods in both suites yet.\n";
+  else
+    o << "| A - B | metric | variants | source mean | target mean | size | same sign | p | verdict |\n"
+         "|---|---|---|---|---|---|---|---|---|\n";
   for (const CarryOverRow& r : c.rows) {
     const bool psnr = r.metric == "psnr";
     const char* f = psnr ? "%+.2f dB" : "%+.4f";
