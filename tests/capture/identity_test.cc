@@ -87,7 +87,9 @@ TEST(SiftMatcherTest, MutualNearestNeighboursByColmapsRule) {
     const int j = reference_best(da, i, db, o);
     const bool mutual = j >= 0 && reference_best(db, j, da, o) == i;
     EXPECT_EQ(found.count(i) > 0, mutual) << i;
-    if (mutual) EXPECT_EQ(found[i], j);
+    if (mutual) {
+      EXPECT_EQ(found[i], j);
+    }
   }
   for (size_t k = 1; k < m.size(); ++k) EXPECT_LT(m[k - 1].first, m[k].first);
 }
