@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/parallel.h"
 #include "capture/colmap_database.h"
+#include "capture/sift_keypoints.h"
 
 namespace weathergs::capture {
 
@@ -56,36 +57,7 @@ std::vector<int> best_matches(const Matrix& dots, const SiftMatchOptions& o) {
   return best;
 }
 
-// COLMAP 3.8's SIFT extraction (first octave, octaves, levels per octave) and VLFeat's refined-level
-// range: at least its s_min, below the top detection level plus the refinement's limit of 1.5.
-constexpr int kFirstOctave = -1, kNumOctaves = 4, kLevels = 3;
-constexpr double kLevelMin = -1.0, kLevelMax = (kLevels - 1) + 1.5;
-// Keypoints are stored in float32: a boundary case counts as possible.
-constexpr double kSlack = 1e-3;
-
-// The scale of each keypoint: COLMAP stores (x, y, scale, orientation) or (x, y, a11, a12, a21, a22)
-// with the affine columns of length `scale`.
-double keypoint_scale(const float* k, int cols) { return cols == 4 ? double(k[2]) : std::hypot(double(k[2]), double(k[4])); }
-
 }  // namespace
-
-bool sift_descriptor_unwritten(double x, double y, double scale, int width, int height) {
-  if (!(scale > 0)) return false;
-  const double sigma0 = 1.6 * std::pow(2.0, 1.0 / kLevels);
-  bool any_octave = false;
-  for (int o = kFirstOctave; o < kFirstOctave + kNumOctaves; ++o) {
-    const double per = std::ldexp(1.0, o);
-    const double level = kLevels * std::log2(scale / (sigma0 * per));
-    if (level < kLevelMin - kSlack || level >= kLevelMax + kSlack) continue;
-    any_octave = true;
-    // VLFeat's octave size (VL_SHIFT_LEFT) and its descriptor's bounds check: (int)(c + 0.5) >= w for
-    // x, >= h - 1 for y, in the octave's pixels, where VLFeat's pixel centres are COLMAP's minus 0.5.
-    const int w = o < 0 ? width << -o : width >> o, h = o < 0 ? height << -o : height >> o;
-    const double xo = (x - 0.5) / per, yo = (y - 0.5) / per;
-    if (xo + 0.5 < w - kSlack && yo + 0.5 < h - 1 - kSlack) return false;
-  }
-  return any_octave;
-}
 
 void SiftMatchOptions::validate() const {
   const std::string where = "sift match options";
@@ -162,11 +134,10 @@ int64_t write_exhaustive_match_list(const std::string& db_path, const std::strin
     if (camera == sizes.end()) throw InputError(db_path, "image " + std::to_string(id) + " has no camera row");
     std::vector<float> k(size_t(rows) * size_t(cols));
     std::memcpy(k.data(), sqlite3_column_blob(st, 3), k.size() * sizeof(float));
-    for (int r = 0; r < rows; ++r) {
-      const float* p = k.data() + size_t(r) * size_t(cols);
-      if (sift_descriptor_unwritten(p[0], p[1], keypoint_scale(p, cols), camera->second.first, camera->second.second))
-        std::fill_n(d->second.data.begin() + int64_t(r) * kDim, kDim, uint8_t(0));
-    }
+    const std::vector<bool> unwritten =
+        sift_descriptors_unwritten(k.data(), rows, cols, camera->second.first, camera->second.second);
+    for (int r = 0; r < rows; ++r)
+      if (unwritten[size_t(r)]) std::fill_n(d->second.data.begin() + int64_t(r) * kDim, kDim, uint8_t(0));
   });
   std::vector<int> ids;
   for (const auto& [id, name] : names) ids.push_back(id);

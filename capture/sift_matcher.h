@@ -33,22 +33,11 @@ struct SiftDescriptors {
 std::vector<std::pair<int, int>> match_sift_descriptors(const SiftDescriptors& a, const SiftDescriptors& b,
                                                         const SiftMatchOptions& options);
 
-// Whether COLMAP 3.8's CPU SIFT stored an unwritten descriptor for this keypoint (COLMAP's
-// coordinates: pixel centres at +0.5; scale as in its keypoints table). VLFeat's descriptor refuses
-// a keypoint whose rounded row is its octave's last row, which its detector and orientation step
-// accept, and COLMAP then stores whatever its buffer held: bytes that differ between runs. The
-// octave is not stored: true when every octave that the keypoint's scale allows refuses it (COLMAP's
-// extraction: first octave -1, 4 octaves, 3 levels; VLFeat: sigma0 = 1.6 * 2^(1/3), refined level
-// within 1.5 of a detection level 0..2). A keypoint that only one of two octaves would refuse counts
-// as written: in the benchmark's datasets such keypoints match and their bytes repeat
-// (docs/determinism.md).
-bool sift_descriptor_unwritten(double x, double y, double scale, int width, int height);
-
 // Reads every image's descriptors from COLMAP's database, matches all pairs (image ids in increasing
 // order, pairs spread over the process's threads, each written in its own slot) and writes COLMAP's raw
 // match list for `colmap matches_importer --match_type raw`: "NAME1 NAME2", one "IDX1 IDX2" line per
-// match, an empty line. Keypoints whose descriptor is unwritten (above) never match. Returns the
-// number of matches written.
+// match, an empty line. Keypoints whose descriptor is unwritten (capture/sift_keypoints.h) take no
+// part: they are nobody's best or second best. Returns the number of matches written.
 int64_t write_exhaustive_match_list(const std::string& database_path, const std::string& match_list_path,
                                     const SiftMatchOptions& options);
 

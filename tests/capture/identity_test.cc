@@ -5,6 +5,7 @@
 
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "core/parallel.h"
 #include "capture/expected_identity.h"
 #include "capture/process.h"
+#include "capture/sift_keypoints.h"
 #include "capture/sift_matcher.h"
 #include "tests/core/test_util.h"
 
@@ -190,17 +192,81 @@ TEST(SiftMatcherTest, MatchListIsTheSameWithOneAndTwoThreads) {
 }
 
 // Keypoints measured in paper pool_rain (600 x 400): the first two are on octave 0's last row, and
-// their stored descriptors differed in each of five extractions of the same images; the third fits
-// octave 0 or 1, and only octave 1 would refuse it: its descriptor repeated in all five.
-TEST(SiftMatcherTest, UnwrittenDescriptorsAreKnown) {
-  EXPECT_TRUE(sift_descriptor_unwritten(394.59634, 399.18218, 2.72, 600, 400));
-  EXPECT_TRUE(sift_descriptor_unwritten(219.00104, 399.09445, 2.70, 600, 400));
-  EXPECT_FALSE(sift_descriptor_unwritten(410.73044, 397.7337, 3.20, 600, 400));
-  EXPECT_FALSE(sift_descriptor_unwritten(300, 200, 2.70, 600, 400));
-  EXPECT_FALSE(sift_descriptor_unwritten(394.6, 398.5, 2.72, 600, 400));  // a row above: written
-  // The upsampled octave -1 (small scales) refuses only its own last row.
-  EXPECT_TRUE(sift_descriptor_unwritten(100, 399.9, 1.2, 600, 400));
-  EXPECT_FALSE(sift_descriptor_unwritten(100, 399.4, 1.2, 600, 400));
+// their stored descriptors differed in each of five extractions of the same images; the third, found
+// in octave 0, repeated in all five, while octave 1 would have refused it.
+TEST(SiftKeypointsTest, TheDescriptorStepRefusesAnOctavesLastRow) {
+  EXPECT_TRUE(sift_descriptor_unwritten(394.59634, 399.18218, 0, 600, 400));
+  EXPECT_TRUE(sift_descriptor_unwritten(219.00104, 399.09445, 0, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(410.73044, 397.7337, 0, 600, 400));
+  EXPECT_TRUE(sift_descriptor_unwritten(410.73044, 397.7337, 1, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(300, 200, 0, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(394.6, 398.5, 0, 600, 400));  // a row above: written
+  // The upsampled octave -1 refuses only its own last row.
+  EXPECT_TRUE(sift_descriptor_unwritten(100, 399.9, -1, 600, 400));
+  EXPECT_FALSE(sift_descriptor_unwritten(100, 399.4, -1, 600, 400));
+}
+
+// One image's keypoints as COLMAP's CPU extraction stores them: octave by octave, level by level,
+// each level scanned from the top row down; `extra` is appended to the scan of (octave, level).
+struct ExtraKeypoint {
+  int octave, level;
+  float x, y, scale;
+};
+std::vector<float> extraction_order(const ExtraKeypoint& extra, int* extra_index) {
+  const double sigma0 = 1.6 * std::pow(2.0, 1.0 / 3.0);
+  std::vector<float> k;
+  for (int o = -1; o <= 2; ++o)
+    for (int l = 0; l < 3; ++l) {
+      const int n = 40 >> (o + 1);  // fewer keypoints in coarser octaves
+      for (int i = 0; i < n; ++i) {
+        // Refined levels up to 0.4 from the detection level; rows from the top down.
+        const float scale = float(sigma0 * std::pow(2.0, o + (l + 0.4 * std::sin(i)) / 3.0));
+        k.insert(k.end(), {float(50 + 13 * i % 500), float(5 + 390.0 * i / n), scale, 0.f, 0.f, scale});
+      }
+      if (o == extra.octave && l == extra.level) {
+        *extra_index = int(k.size() / 6);
+        k.insert(k.end(), {extra.x, extra.y, extra.scale, 0.f, 0.f, extra.scale});
+      }
+    }
+  return k;
+}
+
+// Measured in paper tanabata_rain: a keypoint on the last row at scale 2.195 is level 0.37 of octave 0
+// or level 3.37 of octave -1. Its stored bytes differed between two extractions: found in octave 0,
+// whose last row it is on. The stored order says which octave: the same keypoint at the end of
+// octave -1's top level is written.
+TEST(SiftKeypointsTest, TheOctaveComesFromTheStoredOrder) {
+  int index = -1;
+  std::vector<float> k = extraction_order({0, 0, 388.46f, 399.124f, 2.195f}, &index);
+  const int rows = int(k.size() / 6);
+  std::vector<int> octaves = sift_keypoint_octaves(k.data(), rows, 6);
+  ASSERT_EQ(int(octaves.size()), rows);
+  EXPECT_EQ(octaves[size_t(index)], 0);
+  EXPECT_EQ(octaves.front(), -1);
+  EXPECT_EQ(octaves.back(), 2);
+  EXPECT_TRUE(std::is_sorted(octaves.begin(), octaves.end()));
+  EXPECT_TRUE(sift_descriptors_unwritten(k.data(), rows, 6, 600, 400)[size_t(index)]);
+
+  k = extraction_order({-1, 2, 388.46f, 399.124f, 2.195f}, &index);
+  octaves = sift_keypoint_octaves(k.data(), rows, 6);
+  ASSERT_EQ(int(octaves.size()), rows);
+  EXPECT_EQ(octaves[size_t(index)], -1);
+  EXPECT_FALSE(sift_descriptors_unwritten(k.data(), rows, 6, 600, 400)[size_t(index)]);
+  // No other keypoint of the list is on a last row.
+  const std::vector<bool> unwritten = sift_descriptors_unwritten(k.data(), rows, 6, 600, 400);
+  EXPECT_EQ(std::count(unwritten.begin(), unwritten.end(), true), 0);
+}
+
+// A list in no extraction's order (a coarse level before a fine one) has no octaves; then a keypoint
+// counts as unwritten only when every octave its scale allows would refuse it.
+TEST(SiftKeypointsTest, OutOfOrderKeypointsFallBackToEveryPossibleOctave) {
+  const std::vector<float> k = {300, 200, 16.f, 0, 0, 16.f,               // octave 2
+                                300, 200, 1.2f, 0, 0, 1.2f,               // octave -1 only
+                                388.46f, 399.124f, 2.195f, 0, 0, 2.195f,  // octave -1 or 0
+                                100, 399.9f, 1.2f, 0, 0, 1.2f};           // octave -1, last row
+  EXPECT_TRUE(sift_keypoint_octaves(k.data(), 4, 6).empty());
+  EXPECT_EQ(sift_descriptors_unwritten(k.data(), 4, 6, 600, 400), std::vector<bool>({false, false, false, true}));
+  EXPECT_TRUE(sift_keypoint_octaves(k.data(), 0, 6).empty());
 }
 
 TEST(SiftMatcherTest, AKeypointWithAnUnwrittenDescriptorNeverMatches) {
