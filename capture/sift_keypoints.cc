@@ -58,7 +58,8 @@ std::vector<int> sift_keypoint_octaves(const float* keypoints, int rows, int col
         double c = i == 0 ? 0.0 : kNone;
         int f = -1;
         // The same scan goes on only if the row did not fall back further than refinement allows.
-        if (i > 0 && row >= previous_row - kRowFallback * std::ldexp(1.0, octave_of(g)) - kSlack) c = cost[size_t(g)], f = g;
+        const double fallback = kRowFallback * std::ldexp(1.0, octave_of(g));
+        if (i > 0 && row >= previous_row - fallback - kSlack) c = cost[size_t(g)], f = g;
         if (best_before < c) c = best_before, f = best_before_group;
         if (c < kNone) {
           next[size_t(g)] = c + std::abs(level - (kSiftLevels * octave_of(g) + g % kSiftLevels));
