@@ -13,7 +13,7 @@ constexpr int kGroups = kSiftNumOctaves * kSiftLevels;  // one per (octave, leve
 // VLFeat: sigma0 = 1.6 * 2^(1/levels); a refined level is at least s_min (-1) and within 1.5 of its
 // detection level (0..levels-1), which is also VLFeat's bound on the refined row and column offsets.
 const double kSigma0 = 1.6 * std::pow(2.0, 1.0 / kSiftLevels);
-constexpr double kLevelMin = -1.0, kMaxOffset = 1.5, kLevelMax = (kSiftLevels - 1) + kMaxOffset;
+constexpr double kLevelMin = -1.0, kMaxOffset = 1.5;
 // VLFeat's refinement moves a keypoint at most one pixel per step for five steps and keeps an offset
 // below 1.5, so a keypoint lies within 6.5 octave pixels of the row it was found on, and two of one
 // scan are out of row order by less than 13; 16 leaves room, far below a new scan's jump to the top.
@@ -26,12 +26,13 @@ int octave_of(int group) { return kSiftFirstOctave + group / kSiftLevels; }
 // A keypoint's level counted from octave 0's first level (octave o's level l is kSiftLevels * o + l).
 double absolute_level(double scale) { return kSiftLevels * std::log2(scale / kSigma0); }
 
+// The group's detection level as an absolute level.
+double group_level(int group) { return kSiftLevels * octave_of(group) + group % kSiftLevels; }
+
 // Whether a keypoint of this absolute level can belong to the group's detection level.
 bool fits(double level, int group) {
-  const int o = octave_of(group), l = group % kSiftLevels;
-  const double in_octave = level - kSiftLevels * o;
-  return std::abs(in_octave - l) <= kMaxOffset + kSlack && in_octave >= kLevelMin - kSlack &&
-         in_octave <= kLevelMax + kSlack;
+  return std::abs(level - group_level(group)) <= kMaxOffset + kSlack &&
+         level - kSiftLevels * octave_of(group) >= kLevelMin - kSlack;
 }
 
 }  // namespace
@@ -62,7 +63,7 @@ std::vector<int> sift_keypoint_octaves(const float* keypoints, int rows, int col
         if (i > 0 && row >= previous_row - fallback - kSlack) c = cost[size_t(g)], f = g;
         if (best_before < c) c = best_before, f = best_before_group;
         if (c < kNone) {
-          next[size_t(g)] = c + std::abs(level - (kSiftLevels * octave_of(g) + g % kSiftLevels));
+          next[size_t(g)] = c + std::abs(level - group_level(g));
           from[size_t(i) * kGroups + size_t(g)] = int8_t(f);
         }
       }
