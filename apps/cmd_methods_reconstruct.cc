@@ -153,7 +153,7 @@ int run(ReconstructArgs& a) {
   ProgressBar bar("train", total);
   int reported = 0;
   auto on_iteration = [&](const reconstruction::IterationStats& st) {
-    if (reported++ == 0) bar.tick(st.iteration - 1);  // a resumed run starts part way
+    if (reported++ == 0) bar.resume_at(st.iteration - 1);  // a resumed run starts part way
     if (st.iteration % 10 == 0 || st.iteration == total) {
       char s[120];
       if (nerf)

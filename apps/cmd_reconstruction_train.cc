@@ -78,7 +78,7 @@ int run_train(TrainArgs& args) {
   double psnr_ema = 0;
   int reported = 0;
   auto on_iteration = [&](const reconstruction::IterationStats& st) {
-    if (reported == 0) bar.tick(st.iteration - 1);  // resumed runs start part way
+    if (reported == 0) bar.resume_at(st.iteration - 1);  // resumed runs start part way
     ++reported;
     psnr_ema = reported == 1 ? st.psnr : 0.9 * psnr_ema + 0.1 * st.psnr;
     if (st.iteration % 10 == 0 || st.iteration == o.train.iterations) {

@@ -37,6 +37,17 @@ ProgressBar::ProgressBar(std::string label, int64_t total)
 
 ProgressBar::~ProgressBar() { finish(); }
 
+double progress_eta_seconds(double seconds, int64_t done_here, int64_t left) {
+  return done_here > 0 && left > 0 ? seconds * double(left) / double(done_here) : 0.0;
+}
+
+void ProgressBar::resume_at(int64_t done) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  done_ = done;
+  resumed_ = done;
+  start_ = last_draw_ = std::chrono::steady_clock::now();
+}
+
 void ProgressBar::tick(int64_t n) {
   const int64_t before = done_.fetch_add(n);
   if (g_quiet) return;
@@ -72,7 +83,7 @@ void ProgressBar::draw(bool final) {
   int filled = int(frac * width + 0.5);
   std::string bar(size_t(filled < 0 ? 0 : filled > width ? width : filled), '#');
   bar.resize(width, '.');
-  double eta = frac > 0 ? secs / frac - secs : 0;
+  const double eta = progress_eta_seconds(secs, done - resumed_, total_ - done);
   std::fprintf(stderr, "%s%s [%s] %lld/%lld %.1fs%s%s %s%s", interactive_ ? "\r" : "", label_.c_str(), bar.c_str(),
                (long long)done, (long long)total_, secs,
                final ? "" : " eta ", final ? "" : std::to_string(int(eta)).append("s").c_str(),

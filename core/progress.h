@@ -24,10 +24,18 @@ double process_cpu_seconds();
 void set_quiet(bool quiet);
 bool is_quiet();
 
+// Seconds left at the rate seen so far: `seconds` spent on `done_here` units, `left` units to go.
+// 0 before any unit is done.
+double progress_eta_seconds(double seconds, int64_t done_here, int64_t left);
+
 class ProgressBar {
  public:
   ProgressBar(std::string label, int64_t total);
   ~ProgressBar();
+  // Work resumed part way (a training from its checkpoint): the first `done` units count toward the
+  // bar but not toward the rate, and the clock restarts, so that the ETA is this run's own rate.
+  // Call it before the first tick.
+  void resume_at(int64_t done);
   void tick(int64_t n = 1);
   // Free text shown after the counter (e.g. "loss 0.031 psnr 27.4"); thread-safe.
   void set_status(const std::string& status);
@@ -38,6 +46,7 @@ class ProgressBar {
   std::string label_;
   int64_t total_;
   std::atomic<int64_t> done_{0};
+  int64_t resumed_ = 0;  // units done before this process started on them
   std::string status_;
   std::mutex mutex_;
   bool interactive_, finished_ = false;

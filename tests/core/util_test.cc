@@ -10,6 +10,7 @@
 #include "core/atomic_file.h"
 #include "core/error.h"
 #include "core/parallel.h"
+#include "core/progress.h"
 #include "core/rng.h"
 #include "core/sha256.h"
 #include "tests/core/test_util.h"
@@ -65,6 +66,28 @@ TEST(RngTest, UniformAndNormalMoments) {
   for (int i = 0; i < 60000; ++i) hist[r.uniform_int(6)]++;
   EXPECT_EQ(hist.size(), 6u);
   for (auto& [k, v] : hist) EXPECT_NEAR(v, 10000, 500);
+}
+
+TEST(ProgressTest, EtaIsTheRateOfTheUnitsDoneHere) {
+  // 69 iterations in 32 s after resuming at 9000 of 14500: 5431 left at 32/69 s each.
+  EXPECT_DOUBLE_EQ(progress_eta_seconds(32.0, 69, 5431), 32.0 * 5431 / 69);
+  EXPECT_EQ(progress_eta_seconds(32.0, 0, 10), 0.0);  // no rate yet
+  EXPECT_EQ(progress_eta_seconds(32.0, 10, 0), 0.0);  // nothing left
+}
+
+TEST(ProgressTest, ResumedBarCountsFromWhereTheWorkStood) {
+  const bool quiet = is_quiet();
+  set_quiet(false);
+  ::testing::internal::CaptureStderr();
+  {
+    ProgressBar bar("train", 100);  // stderr is captured, so the bar prints plain lines
+    bar.resume_at(85);
+    bar.tick(5);  // crosses 90%: one line
+  }
+  const std::string out = ::testing::internal::GetCapturedStderr();
+  set_quiet(quiet);
+  EXPECT_NE(out.find("train [###########################...] 90/100"), std::string::npos) << out;
+  EXPECT_NE(out.find("90/100"), out.rfind("90/100")) << "the final summary repeats the count: " << out;
 }
 
 TEST(Sha256Test, Fips180Vectors) {
