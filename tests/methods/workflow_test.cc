@@ -136,5 +136,41 @@ TEST(Workflow, FastIterationsLetEachRunTakeItsOwnLength) {
   EXPECT_EQ(runtime(quick), 45) << quick;
 }
 
+// Two-thread generations go before one-thread trainings under the greedy scheduler (the one
+// `--prioritize` needs, docs/archive.md): otherwise a training started after the first generation
+// holds one core, and the second generation waits for it with the other core idle. A stand-in
+// binary logs each command's start and end, so the test needs neither Blender nor training.
+TEST(Workflow, GenerationsGoBeforeTrainingsUnderTheGreedyScheduler) {
+  if (capture::find_executable("snakemake").empty()) GTEST_SKIP() << "snakemake not installed";
+  testing::TempDir tmp;
+  const std::string src = WEATHERGS_SOURCE_DIR;
+  const std::string events = tmp / "events.txt", fake = tmp / "weathergs";
+  write_file_atomic(fake, "#!/usr/bin/env bash\n"
+                          "cmd=; out=; prev=\n"
+                          "for a in \"$@\"; do\n"
+                          "  case $a in doctor|generate|reconstruct) [ -z \"$cmd\" ] && cmd=$a ;; esac\n"
+                          "  [ \"$prev\" = --out ] && out=$a; prev=$a\n"
+                          "done\n"
+                          "[ \"$cmd\" = doctor ] && exit 0\n"
+                          "echo \"start $cmd\" >> '" + events + "'\n"
+                          "sleep 2; mkdir -p \"$out\"\n"
+                          "if [ \"$cmd\" = generate ]; then echo '{}' > \"$out/dataset.json\"; "
+                          "else echo '{}' > \"$out/results.json\"; echo '{}' > \"$out/curve.json\"; fi\n"
+                          "echo \"end $cmd\" >> '" + events + "'\n");
+  fs::permissions(fake, fs::perms::owner_all);
+  const std::string out = tmp / "suite", log = tmp / "snakemake.log";
+  const std::string cmd = "cd '" + std::string(tmp.path()) + "' && USER=${USER:-weathergs} snakemake -s " + src +
+                          "/workflow/Snakefile --cores 2 --scheduler greedy " + out +
+                          "/runs/pool_rain/3dgs/seed0/results.json " + out +
+                          "/runs/pool_snow/3dgs/seed0/results.json --config weathergs=" + fake + " scenes=" + src +
+                          "/scenes out=" + out + " threads=1 'variants=[pool_rain,pool_snow]' 'methods=[3dgs]' " +
+                          "'seeds=[0]' > '" + log + "' 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << read_file(log);
+  EXPECT_EQ(read_file(events),
+            "start generate\nend generate\nstart generate\nend generate\n"
+            "start reconstruct\nstart reconstruct\nend reconstruct\nend reconstruct\n")
+      << "the generations and trainings ran in this order instead";
+}
+
 }  // namespace
 }  // namespace weathergs::methods
