@@ -166,10 +166,11 @@ TEST(Workflow, GenerationsGoBeforeTrainingsUnderTheGreedyScheduler) {
                           "/scenes out=" + out + " threads=1 'variants=[pool_rain,pool_snow]' 'methods=[3dgs]' " +
                           "'seeds=[0]' > '" + log + "' 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << read_file(log);
-  EXPECT_EQ(read_file(events),
-            "start generate\nend generate\nstart generate\nend generate\n"
-            "start reconstruct\nstart reconstruct\nend reconstruct\nend reconstruct\n")
-      << "the generations and trainings ran in this order instead";
+  // Only the generations' place is asserted: how the two trainings interleave depends on the load.
+  const std::string order = read_file(events);
+  const std::string generations = "start generate\nend generate\nstart generate\nend generate\n";
+  EXPECT_EQ(order.substr(0, generations.size()), generations) << "the commands ran in this order:\n" << order;
+  EXPECT_EQ(order.size(), generations.size() + 2 * std::string("start reconstruct\nend reconstruct\n").size()) << order;
 }
 
 }  // namespace
