@@ -87,6 +87,18 @@ rel_images=$(realpath -m --relative-to="$(dirname "$DOC")" "$IMAGES")
     if [ ${#carry_results[@]} = 0 ]; then
       echo "No run archived in \`${CARRY_TO#$ROOT/}\` yet."
     else
+      # The target suite's own state, where it has a matrix: how much of it the table rests on.
+      if [ -f "$CARRY_TO/matrix.json" ]; then
+        if ! carry_status=$("$W" --quiet archive status --root "$(dirname "$CARRY_TO")" --suite "$(basename "$CARRY_TO")" 2>&1); then
+          echo "$carry_status" >&2; fail "weathergs archive status failed on $CARRY_TO"
+        fi
+        echo "Its state (\`weathergs archive status --suite $(basename "$CARRY_TO")\`):"
+        echo
+        echo '```'
+        grep -E '^(done|CPU-hours)' <<<"$carry_status"
+        echo '```'
+        echo
+      fi
       echo "\`weathergs carry-over ${SUITE#$ROOT/} ${CARRY_TO#$ROOT/}\`, its archive$carry_commit:"
       echo
       if ! msg=$("$W" --quiet carry-over "$SUITE" "$CARRY_TO" -o "$tmp/carry.md" 2>&1); then
