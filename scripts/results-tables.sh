@@ -42,9 +42,19 @@ if [ ${#carry_results[@]} -gt 0 ] && git -C "$CARRY_TO" rev-parse --is-inside-wo
   carry_commit=" at its commit $(git -C "$CARRY_TO" log -1 --format=%h -- . 2>/dev/null)"
 fi
 
-suite_name=$(basename "$SUITE")
-if ! status=$("$W" --quiet archive status --root "$(dirname "$SUITE")" --suite "$suite_name" 2>&1); then
-  echo "$status" >&2; fail "weathergs archive status failed on $SUITE"
+# A suite folder's state: the done and CPU-hours lines of `weathergs archive status`.
+suite_state() {
+  local out
+  if ! out=$("$W" --quiet archive status --root "$(dirname "$1")" --suite "$(basename "$1")" 2>&1); then
+    echo "$out" >&2; fail "weathergs archive status failed on $1"
+  fi
+  grep -E '^(done|CPU-hours)' <<<"$out" || true
+}
+state=$(suite_state "$SUITE") || exit 2
+# The carry-over target's own state, where it has a matrix: how much of it the table rests on.
+carry_state=""
+if [ ${#carry_results[@]} -gt 0 ] && [ -f "$CARRY_TO/matrix.json" ]; then
+  carry_state=$(suite_state "$CARRY_TO") || exit 2
 fi
 mapfile -t results < <(find "$SUITE" -mindepth 4 -maxdepth 4 -path '*/seed*/results.json' | sort)
 mapfile -t curves < <(find "$SUITE" -mindepth 4 -maxdepth 4 -path '*/seed*/curve.json' | sort)
@@ -56,7 +66,7 @@ rel_images=$(realpath -m --relative-to="$(dirname "$DOC")" "$IMAGES")
   echo "${#results[@]} archived runs."
   echo
   echo '```'
-  grep -E '^(done|CPU-hours)' <<<"$status"
+  echo "$state"
   echo '```'
   echo
   if [ ${#results[@]} = 0 ]; then
@@ -87,15 +97,11 @@ rel_images=$(realpath -m --relative-to="$(dirname "$DOC")" "$IMAGES")
     if [ ${#carry_results[@]} = 0 ]; then
       echo "No run archived in \`${CARRY_TO#$ROOT/}\` yet."
     else
-      # The target suite's own state, where it has a matrix: how much of it the table rests on.
-      if [ -f "$CARRY_TO/matrix.json" ]; then
-        if ! carry_status=$("$W" --quiet archive status --root "$(dirname "$CARRY_TO")" --suite "$(basename "$CARRY_TO")" 2>&1); then
-          echo "$carry_status" >&2; fail "weathergs archive status failed on $CARRY_TO"
-        fi
+      if [ -n "$carry_state" ]; then
         echo "Its state (\`weathergs archive status --suite $(basename "$CARRY_TO")\`):"
         echo
         echo '```'
-        grep -E '^(done|CPU-hours)' <<<"$carry_status"
+        echo "$carry_state"
         echo '```'
         echo
       fi
